@@ -1,0 +1,61 @@
+//! Finds Debian's double-precision Bullet through pkg-config, compiles the C++ shim in `shim/` and
+//! generates bindings for the shim's own C header (nothing of Bullet's C++ reaches Rust).
+
+use std::env;
+use std::path::PathBuf;
+
+const INSTALL_HINT: &str = "Bullet (double precision) was not found through pkg-config `bullet-float64`.\n\
+     Install it with: sudo apt-get install libbullet-dev pkg-config\n\
+     (bindgen also needs libclang: sudo apt-get install libclang-dev)";
+
+fn main() {
+    println!("cargo:rerun-if-changed=shim/snake_shim.h");
+    println!("cargo:rerun-if-changed=shim/snake_shim.cpp");
+    println!("cargo:rerun-if-env-changed=PKG_CONFIG_PATH");
+
+    // Double precision is what pybullet is built with; the single-precision `bullet.pc` diverges.
+    let bullet = match pkg_config::Config::new()
+        .atleast_version("3.24")
+        .probe("bullet-float64")
+    {
+        Ok(lib) => lib,
+        Err(err) => {
+            eprintln!("{INSTALL_HINT}\n(pkg-config said: {err})");
+            panic!("{INSTALL_HINT}");
+        }
+    };
+
+    let mut build = cc::Build::new();
+    build
+        .cpp(true)
+        // The shim is on the hot path of every step; optimise it even in debug builds.
+        .opt_level(2)
+        .file("shim/snake_shim.cpp")
+        .flag_if_supported("-std=c++14")
+        // Bit-for-bit agreement with pybullet needs IEEE arithmetic in the exact order written:
+        // no contraction into FMA, no fast-math.
+        .flag_if_supported("-ffp-contract=off")
+        .flag_if_supported("-fno-fast-math")
+        .warnings(false);
+    for path in &bullet.include_paths {
+        build.include(path);
+    }
+    for (key, value) in &bullet.defines {
+        build.define(key, value.as_deref());
+    }
+    build.compile("snake_shim");
+
+    let bindings = bindgen::Builder::default()
+        .header("shim/snake_shim.h")
+        .allowlist_function("ss_.*")
+        .allowlist_type("ss_.*")
+        .allowlist_var("SS_.*")
+        .derive_default(true)
+        .parse_callbacks(Box::new(bindgen::CargoCallbacks::new()))
+        .generate()
+        .expect("bindgen could not parse shim/snake_shim.h (is libclang-dev installed?)");
+    let out = PathBuf::from(env::var("OUT_DIR").expect("OUT_DIR is set by cargo"));
+    bindings
+        .write_to_file(out.join("bindings.rs"))
+        .expect("could not write bindings.rs");
+}

@@ -1,0 +1,565 @@
+// snake_shim.cpp: see snake_shim.h. Each step below names the pybullet 3.2.7 code it mirrors; the order
+// of calls is part of the contract, because pair order, proxy ids and rounding all follow from it.
+
+#include "snake_shim.h"
+
+#include <btBulletDynamicsCommon.h>
+#include <BulletDynamics/Featherstone/btMultiBody.h>
+#include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+#include <BulletDynamics/Featherstone/btMultiBodyJointMotor.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
+#include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
+#include <LinearMath/btQuickprof.h>
+
+#include <cmath>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <new>
+#include <string>
+#include <vector>
+
+namespace {
+
+thread_local std::string g_last_error;
+
+int fail(int code, const char* message) {
+    g_last_error = message;
+    return code;
+}
+
+// Bullet's built-in profiler keeps process-wide, unsynchronised state; stepping worlds on several
+// threads through it races. Its hooks are replaced by no-ops once, before any world exists.
+void profile_enter_noop(const char*) {}
+void profile_leave_noop() {}
+
+std::once_flag g_process_setup;
+
+void process_setup() {
+    btSetCustomEnterProfileZoneFunc(profile_enter_noop);
+    btSetCustomLeaveProfileZoneFunc(profile_leave_noop);
+    // pybullet sets this global to 0 in createEmptyDynamicsWorld; every world here uses the same value,
+    // so setting it once keeps it constant while worlds step concurrently.
+    gDbvtMargin = btScalar(0);
+}
+
+// pybullet's MyOverlapFilterCallback in B3_FILTER_GROUPAMASKB_OR_GROUPBMASKA mode (PSCP 781-852).
+struct OrFilterCallback : public btOverlapFilterCallback {
+    bool needBroadphaseCollision(btBroadphaseProxy* p0, btBroadphaseProxy* p1) const override {
+        bool collides = (p0->m_collisionFilterGroup & p1->m_collisionFilterMask) != 0;
+        collides = collides || (p1->m_collisionFilterGroup & p0->m_collisionFilterMask);
+        return collides;
+    }
+};
+
+bool finite3(const double* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+}  // namespace
+
+struct ss_world {
+    // Declaration order is construction order; destruction runs in reverse, world first.
+    std::unique_ptr<btDefaultCollisionConfiguration> config;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    std::unique_ptr<OrFilterCallback> filter;
+    std::unique_ptr<btHashedOverlappingPairCache> pair_cache;
+    std::unique_ptr<btDbvtBroadphase> broadphase;
+    std::unique_ptr<btMultiBodyConstraintSolver> solver;
+    std::unique_ptr<btMultiBodyDynamicsWorld> world;
+    std::vector<std::unique_ptr<btCollisionShape>> shapes;
+    std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
+    std::vector<std::unique_ptr<btMultiBodyConstraint>> constraints;
+    std::vector<std::unique_ptr<btMultiBody>> bodies;
+    btScalar dt = btScalar(1.) / btScalar(240.);
+
+    ~ss_world() {
+        if (world) {
+            for (auto& c : constraints) world->removeMultiBodyConstraint(c.get());
+            for (auto& b : bodies) world->removeMultiBody(b.get());
+            for (auto& c : colliders) world->removeCollisionObject(c.get());
+        }
+    }
+
+    btMultiBody* body(int index) const {
+        if (index < 0 || index >= (int)bodies.size()) return nullptr;
+        return bodies[index].get();
+    }
+};
+
+namespace {
+
+// The pybullet programmatic-body conversion (ConvertURDF2BulletInternal, U2B 202-768, and the
+// post-processing in ConvertURDF2Bullet, U2B 868-895) for a body whose links all use `shape`, whose
+// inertial frames are the identity, and whose joints are revolute. `link_*` arrays are in pybullet's
+// link order, which for a chain equals Bullet's depth-first order.
+int build_multibody(ss_world* w, btCollisionShape* shape, double base_mass, const double* base_pos,
+                    const double* base_orn, int num_links, const double* link_masses,
+                    const double* link_positions, const double* link_orientations, const int* link_parents,
+                    const double* link_axes, int* body_out) {
+    btTransform root;
+    root.setOrigin(btVector3(base_pos[0], base_pos[1], base_pos[2]));
+    root.setRotation(btQuaternion(base_orn[0], base_orn[1], base_orn[2], base_orn[3]));
+
+    btTransform identity;
+    identity.setIdentity();
+
+    // Base (root link): no parent joint, so linkTransformInWorldSpace = root * identity.
+    btScalar mass = base_mass;
+    btVector3 inertia(0, 0, 0);
+    if (mass != btScalar(0)) shape->calculateLocalInertia(mass, inertia);
+    bool fixed_base = (mass == btScalar(0));
+    auto mb = std::unique_ptr<btMultiBody>(new btMultiBody(num_links, mass, inertia, fixed_base, false));
+    btMultiBody* body = mb.get();
+
+    std::vector<btTransform> link_world(num_links + 1);
+    link_world[0] = root * identity;
+
+    auto add_collider = [&](int mb_link, const btTransform& tr) {
+        auto col = std::unique_ptr<btMultiBodyLinkCollider>(new btMultiBodyLinkCollider(body, mb_link));
+        col->setCollisionShape(shape);
+        col->setWorldTransform(tr);
+        bool dynamic = !(mb_link < 0 && body->hasFixedBase());
+        int group = dynamic ? int(btBroadphaseProxy::DefaultFilter) : int(btBroadphaseProxy::StaticFilter);
+        int mask = dynamic ? int(btBroadphaseProxy::AllFilter)
+                           : int(btBroadphaseProxy::AllFilter ^ btBroadphaseProxy::StaticFilter);
+        w->world->addCollisionObject(col.get(), group, mask);
+        if (mb_link >= 0) {
+            // Revolute joints are never "all fixed", so no link becomes CF_STATIC_OBJECT.
+            body->getLink(mb_link).m_collider = col.get();
+        } else {
+            if (body->getBaseMass() == btScalar(0))
+                col->setCollisionFlags(col->getCollisionFlags() | btCollisionObject::CF_STATIC_OBJECT);
+            body->setBaseCollider(col.get());
+        }
+        w->colliders.push_back(std::move(col));
+    };
+    add_collider(-1, link_world[0]);
+
+    // Links, depth first from the base in increasing index (a chain keeps the user's order).
+    std::vector<int> order;
+    std::vector<int> stack;
+    stack.push_back(-1);
+    while (!stack.empty()) {
+        int parent = stack.back();
+        stack.pop_back();
+        if (parent >= 0) order.push_back(parent);
+        for (int child = num_links - 1; child >= 0; --child)
+            if (link_parents[child] - 1 == parent) stack.push_back(child);
+    }
+    if ((int)order.size() != num_links) return fail(SS_ERR_ARGUMENT, "link parents do not form a tree rooted at the base");
+    std::vector<int> mb_index(num_links);
+    for (int k = 0; k < num_links; ++k) mb_index[order[k]] = k;
+
+    for (int k = 0; k < num_links; ++k) {
+        int i = order[k];
+        int parent = link_parents[i] - 1;
+        int mb_parent = parent < 0 ? -1 : mb_index[parent];
+
+        btTransform parent2joint;
+        parent2joint.setOrigin(btVector3(link_positions[3 * i], link_positions[3 * i + 1], link_positions[3 * i + 2]));
+        parent2joint.setRotation(btQuaternion(link_orientations[4 * i], link_orientations[4 * i + 1],
+                                              link_orientations[4 * i + 2], link_orientations[4 * i + 3]));
+        const btTransform& parent_world = link_world[parent + 1];
+        link_world[i + 1] = parent_world * parent2joint;
+
+        btScalar link_mass = link_masses[i];
+        btVector3 link_inertia(0, 0, 0);
+        if (link_mass != btScalar(0)) shape->calculateLocalInertia(link_mass, link_inertia);
+
+        btTransform parent_inertial = identity;  // inertial frames are the link frames
+        btTransform local_inertial = identity;
+        btTransform offset_in_a = parent_inertial.inverse() * parent2joint;
+        btTransform offset_in_b = local_inertial.inverse();
+        btQuaternion parent_rot_to_this = offset_in_b.getRotation() * offset_in_a.inverse().getRotation();
+
+        btMultibodyLink& link = body->getLink(k);
+        link.m_jointDamping = 0;
+        link.m_jointFriction = 0;
+        link.m_jointLowerLimit = 1;  // lower > upper: no limit (pybullet's programmatic defaults)
+        link.m_jointUpperLimit = -1;
+        link.m_jointMaxForce = 0;
+        link.m_jointMaxVelocity = 0;
+
+        btVector3 axis(link_axes[3 * i], link_axes[3 * i + 1], link_axes[3 * i + 2]);
+        body->setupRevolute(k, link_mass, link_inertia, mb_parent, parent_rot_to_this,
+                            quatRotate(offset_in_b.getRotation(), axis), offset_in_a.getOrigin(),
+                            -offset_in_b.getOrigin(), true);
+        add_collider(k, link_world[i + 1]);
+    }
+
+    // Post process (U2B 868-895).
+    body->setHasSelfCollision(false);
+    body->finalizeMultiDof();
+    body->setBaseWorldTransform(root * identity);
+    btAlignedObjectArray<btQuaternion> scratch_q;
+    btAlignedObjectArray<btVector3> scratch_m;
+    body->forwardKinematics(scratch_q, scratch_m);
+    body->updateCollisionObjectWorldTransforms(scratch_q, scratch_m);
+    w->world->addMultiBody(body);
+
+    // createJointMotors (PSCP 3117): a velocity-0 motor with max impulse 1 on every revolute joint.
+    for (int k = 0; k < body->getNumLinks(); ++k) {
+        if (body->getLink(k).m_jointType != btMultibodyLink::eRevolute) continue;
+        float max_motor_impulse = 1.f;
+        btScalar desired_velocity = 0.f;
+        auto motor = std::unique_ptr<btMultiBodyJointMotor>(
+            new btMultiBodyJointMotor(body, k, 0, desired_velocity, max_motor_impulse));
+        motor->setPositionTarget(0, 0);
+        motor->setVelocityTarget(0, 1);
+        body->getLink(k).m_userPtr = motor.get();
+        w->world->addMultiBodyConstraint(motor.get());
+        motor->finalizeMultiDof();
+        w->constraints.push_back(std::move(motor));
+    }
+
+    *body_out = (int)w->bodies.size();
+    w->bodies.push_back(std::move(mb));
+    return SS_OK;
+}
+
+btMultiBodyJointMotor* joint_motor(btMultiBody* body, int joint) {
+    return static_cast<btMultiBodyJointMotor*>(const_cast<void*>(body->getLink(joint).m_userPtr));
+}
+
+// POSITION_CONTROL on one joint (PSCP 7282-7345); max_velocity <= 0 leaves the rhs clamp as it is.
+void set_position_motor(btMultiBody* body, int joint, btScalar dt, double target_pos, double target_vel,
+                        double force, double kp, double kd, double max_velocity) {
+    btMultiBodyJointMotor* motor = joint_motor(body, joint);
+    if (max_velocity > 0) motor->setRhsClamp(max_velocity);
+    motor->setVelocityTarget(target_vel, kd);
+    btScalar desired = target_pos;
+    const btMultibodyLink& link = body->getLink(joint);
+    if (link.m_jointLowerLimit <= link.m_jointUpperLimit) btClamp(desired, link.m_jointLowerLimit, link.m_jointUpperLimit);
+    motor->setPositionTarget(desired, kp);
+    motor->setMaxAppliedImpulse(force * dt);
+}
+
+}  // namespace
+
+#define SS_GUARD_BEGIN try {
+#define SS_GUARD_END                                                              \
+    }                                                                             \
+    catch (const std::bad_alloc&) { return fail(SS_ERR_EXCEPTION, "out of memory"); } \
+    catch (const std::exception& e) { return fail(SS_ERR_EXCEPTION, e.what()); }  \
+    catch (...) { return fail(SS_ERR_EXCEPTION, "unknown C++ exception"); }
+
+extern "C" {
+
+const char* ss_last_error(void) { return g_last_error.c_str(); }
+
+ss_world* ss_world_new(void) {
+    try {
+        std::call_once(g_process_setup, process_setup);
+        auto w = std::unique_ptr<ss_world>(new ss_world());
+        // createEmptyDynamicsWorld (PSCP 2707-2826).
+        w->config.reset(new btDefaultCollisionConfiguration());
+        w->dispatcher.reset(new btCollisionDispatcher(w->config.get()));
+        w->filter.reset(new OrFilterCallback());
+        w->pair_cache.reset(new btHashedOverlappingPairCache());
+        w->pair_cache->setOverlapFilterCallback(w->filter.get());
+        w->broadphase.reset(new btDbvtBroadphase(w->pair_cache.get()));
+        w->broadphase->setVelocityPrediction(0);
+        w->solver.reset(new btMultiBodyConstraintSolver());
+        w->world.reset(new btMultiBodyDynamicsWorld(w->dispatcher.get(), w->broadphase.get(), w->solver.get(),
+                                                    w->config.get()));
+        btMultiBodyDynamicsWorld* world = w->world.get();
+        world->setForceUpdateAllAabbs(false);
+        world->setGravity(btVector3(0, 0, 0));
+        btContactSolverInfo& info = world->getSolverInfo();
+        info.m_erp2 = 0.08;
+        info.m_frictionERP = 0.2;
+        info.m_linearSlop = 0.00001;
+        info.m_numIterations = 50;
+        info.m_minimumSolverBatchSize = 0;
+        info.m_warmstartingFactor = 0.1;
+        info.m_leastSquaresResidualThreshold = 1e-7;
+        return w.release();
+    } catch (const std::exception& e) {
+        g_last_error = e.what();
+    } catch (...) {
+        g_last_error = "unknown C++ exception";
+    }
+    return nullptr;
+}
+
+void ss_world_free(ss_world* world) {
+    try {
+        delete world;
+    } catch (...) {
+    }
+}
+
+int ss_world_set_gravity(ss_world* w, double gx, double gy, double gz) {
+    if (!w) return fail(SS_ERR_NULL, "world is null");
+    if (!std::isfinite(gx) || !std::isfinite(gy) || !std::isfinite(gz)) return fail(SS_ERR_ARGUMENT, "gravity must be finite");
+    SS_GUARD_BEGIN
+    w->world->setGravity(btVector3(gx, gy, gz));
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_world_set_time_step(ss_world* w, double dt) {
+    if (!w) return fail(SS_ERR_NULL, "world is null");
+    if (!(dt > 0) || !std::isfinite(dt)) return fail(SS_ERR_ARGUMENT, "time step must be positive and finite");
+    w->dt = dt;
+    return SS_OK;
+}
+
+int ss_world_num_bodies(const ss_world* w, int* count) {
+    if (!w || !count) return fail(SS_ERR_NULL, "null argument");
+    *count = (int)w->bodies.size();
+    return SS_OK;
+}
+
+int ss_world_add_plane(ss_world* w, int* body_out) {
+    if (!w || !body_out) return fail(SS_ERR_NULL, "null argument");
+    SS_GUARD_BEGIN
+    // createCollisionShape(GEOM_PLANE): btStaticPlaneShape((0,0,1), 0) with margin 0.001.
+    auto plane = std::unique_ptr<btCollisionShape>(new btStaticPlaneShape(btVector3(0, 0, 1), 0));
+    plane->setMargin(0.001);
+    btCollisionShape* shape = plane.get();
+    w->shapes.push_back(std::move(plane));
+    const double pos[3] = {0, 0, 0};
+    const double orn[4] = {0, 0, 0, 1};
+    return build_multibody(w, shape, 0.0, pos, orn, 0, nullptr, nullptr, nullptr, nullptr, nullptr, body_out);
+    SS_GUARD_END
+}
+
+int ss_world_add_box_chain(ss_world* w, const ss_chain_desc* d, int* body_out) {
+    if (!w || !d || !body_out) return fail(SS_ERR_NULL, "null argument");
+    if (d->num_links < 0) return fail(SS_ERR_ARGUMENT, "num_links must be >= 0");
+    if (d->num_links > 0 && (!d->link_masses || !d->link_positions || !d->link_orientations || !d->link_parents || !d->link_axes))
+        return fail(SS_ERR_NULL, "link arrays must not be null");
+    if (!finite3(d->half_extents) || !(d->half_extents[0] > 0 && d->half_extents[1] > 0 && d->half_extents[2] > 0))
+        return fail(SS_ERR_ARGUMENT, "half extents must be positive and finite");
+    if (!std::isfinite(d->base_mass) || d->base_mass < 0) return fail(SS_ERR_ARGUMENT, "base mass must be finite and >= 0");
+    if (!finite3(d->base_position) || !std::isfinite(d->base_orientation[3]) || !finite3(d->base_orientation))
+        return fail(SS_ERR_ARGUMENT, "base pose must be finite");
+    for (int i = 0; i < d->num_links; ++i) {
+        if (!std::isfinite(d->link_masses[i]) || d->link_masses[i] < 0) return fail(SS_ERR_ARGUMENT, "link masses must be finite and >= 0");
+        if (!finite3(d->link_positions + 3 * i) || !finite3(d->link_axes + 3 * i) || !finite3(d->link_orientations + 4 * i) ||
+            !std::isfinite(d->link_orientations[4 * i + 3]))
+            return fail(SS_ERR_ARGUMENT, "link frames and axes must be finite");
+        if (d->link_parents[i] < 0 || d->link_parents[i] > i) return fail(SS_ERR_ARGUMENT, "link parent must be 0 (base) or an earlier link + 1");
+    }
+    SS_GUARD_BEGIN
+    // createCollisionShape(GEOM_BOX): btBoxShape then setMargin(0.001); the order sets the inner extents.
+    auto box = std::unique_ptr<btCollisionShape>(
+        new btBoxShape(btVector3(d->half_extents[0], d->half_extents[1], d->half_extents[2])));
+    box->setMargin(0.001);
+    btCollisionShape* shape = box.get();
+    w->shapes.push_back(std::move(box));
+    return build_multibody(w, shape, d->base_mass, d->base_position, d->base_orientation, d->num_links, d->link_masses,
+                           d->link_positions, d->link_orientations, d->link_parents, d->link_axes, body_out);
+    SS_GUARD_END
+}
+
+int ss_body_num_joints(const ss_world* w, int body, int* count) {
+    if (!w || !count) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    *count = mb->getNumLinks();
+    return SS_OK;
+}
+
+int ss_change_dynamics(ss_world* w, int body, int link, const ss_dynamics* d) {
+    if (!w || !d) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    if (d->has_anisotropic_friction && !finite3(d->anisotropic_friction)) return fail(SS_ERR_ARGUMENT, "anisotropic friction must be finite");
+    SS_GUARD_BEGIN
+    // processChangeDynamicsInfoCommand (PSCP 10656), in its order.
+    if (d->linear_damping >= 0) mb->setLinearDamping(d->linear_damping);
+    if (d->angular_damping >= 0) mb->setAngularDamping(d->angular_damping);
+    btCollisionObject* col = link == -1 ? (btCollisionObject*)mb->getBaseCollider() : (btCollisionObject*)mb->getLinkCollider(link);
+    if (link >= 0 && d->joint_damping >= 0) mb->getLink(link).m_jointDamping = d->joint_damping;
+    if (col) {
+        if (d->lateral_friction >= 0) col->setFriction(d->lateral_friction);
+        if (d->spinning_friction >= 0) col->setSpinningFriction(d->spinning_friction);
+        if (d->rolling_friction >= 0) col->setRollingFriction(d->rolling_friction);
+        if (d->restitution >= 0) col->setRestitution(d->restitution);
+        if (d->friction_anchor >= 0) {
+            if (d->friction_anchor)
+                col->setCollisionFlags(col->getCollisionFlags() | btCollisionObject::CF_HAS_FRICTION_ANCHOR);
+            else
+                col->setCollisionFlags(col->getCollisionFlags() & ~btCollisionObject::CF_HAS_FRICTION_ANCHOR);
+        }
+        if (d->has_anisotropic_friction) {
+            col->setAnisotropicFriction(
+                btVector3(d->anisotropic_friction[0], d->anisotropic_friction[1], d->anisotropic_friction[2]));
+        }
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_set_joint_motor(ss_world* w, int body, int joint, int mode, double target_position, double target_velocity,
+                       double force, double kp, double kd, double max_velocity) {
+    if (!w) return fail(SS_ERR_NULL, "world is null");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (joint < 0 || joint >= mb->getNumLinks() || !joint_motor(mb, joint)) return fail(SS_ERR_LINK, "no such motorised joint");
+    if (!std::isfinite(target_position) || !std::isfinite(target_velocity) || !std::isfinite(force) || !std::isfinite(kp) ||
+        !std::isfinite(kd) || std::isnan(max_velocity))
+        return fail(SS_ERR_ARGUMENT, "motor arguments must be finite");
+    SS_GUARD_BEGIN
+    switch (mode) {
+        case SS_POSITION_CONTROL:
+            set_position_motor(mb, joint, w->dt, target_position, target_velocity, force, kp, kd, max_velocity);
+            return SS_OK;
+        case SS_VELOCITY_CONTROL: {
+            // PSCP 7224-7280.
+            btMultiBodyJointMotor* motor = joint_motor(mb, joint);
+            motor->setVelocityTarget(target_velocity, kd);
+            motor->setPositionTarget(0, 0);
+            motor->setRhsClamp(SIMD_INFINITY);
+            motor->setMaxAppliedImpulse(force * w->dt);
+            return SS_OK;
+        }
+        case SS_TORQUE_CONTROL:
+            mb->addJointTorqueMultiDof(joint, 0, force);
+            return SS_OK;
+        default:
+            return fail(SS_ERR_ARGUMENT, "unknown control mode");
+    }
+    SS_GUARD_END
+}
+
+int ss_set_position_targets(ss_world* w, int body, int count, const double* targets, double force, double kp, double kd) {
+    if (!w || (count > 0 && !targets)) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (count < 0 || count > mb->getNumLinks()) return fail(SS_ERR_LINK, "more targets than joints");
+    if (!std::isfinite(force) || !std::isfinite(kp) || !std::isfinite(kd)) return fail(SS_ERR_ARGUMENT, "motor arguments must be finite");
+    for (int j = 0; j < count; ++j) {
+        if (!std::isfinite(targets[j])) return fail(SS_ERR_ARGUMENT, "joint targets must be finite");
+        if (!joint_motor(mb, j)) return fail(SS_ERR_LINK, "joint has no motor");
+    }
+    SS_GUARD_BEGIN
+    for (int j = 0; j < count; ++j) set_position_motor(mb, j, w->dt, targets[j], 0.0, force, kp, kd, -1.0);
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_world_step(ss_world* w) {
+    if (!w) return fail(SS_ERR_NULL, "world is null");
+    SS_GUARD_BEGIN
+    // processForwardDynamicsCommand (PSCP 10554): joint damping torques first, then stepSimulation(dt, 0).
+    for (auto& b : w->bodies) {
+        btMultiBody* mb = b.get();
+        for (int l = 0; l < mb->getNumLinks(); ++l) {
+            for (int d = 0; d < mb->getLink(l).m_dofCount; ++d) {
+                double damping_torque = -mb->getLink(l).m_jointDamping * mb->getJointVelMultiDof(l)[d];
+                mb->addJointTorqueMultiDof(l, d, damping_torque);
+            }
+        }
+    }
+    w->world->stepSimulation(w->dt, 0);
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_get_base_state(const ss_world* w, int body, ss_base_state* out) {
+    if (!w || !out) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    SS_GUARD_BEGIN
+    // PSCP 7933-7974: the pose goes through a btTransform, so the quaternion is rebuilt from a matrix.
+    btTransform tr;
+    tr.setOrigin(mb->getBasePos());
+    tr.setRotation(mb->getWorldToBaseRot().inverse());
+    btQuaternion q = tr.getRotation();
+    for (int k = 0; k < 3; ++k) {
+        out->position[k] = tr.getOrigin()[k];
+        out->linear_velocity[k] = mb->getBaseVel()[k];
+        out->angular_velocity[k] = mb->getBaseOmega()[k];
+    }
+    for (int k = 0; k < 4; ++k) out->orientation[k] = q[k];
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_get_joint_states(const ss_world* w, int body, int count, double* positions, double* velocities, double* torques) {
+    if (!w) return fail(SS_ERR_NULL, "world is null");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (count < 0 || count > mb->getNumLinks()) return fail(SS_ERR_LINK, "more joints asked for than the body has");
+    SS_GUARD_BEGIN
+    for (int j = 0; j < count; ++j) {
+        if (positions) positions[j] = mb->getJointPosMultiDof(j)[0];
+        if (velocities) velocities[j] = mb->getJointVelMultiDof(j)[0];
+        if (torques) {
+            btMultiBodyJointMotor* motor = joint_motor(mb, j);
+            torques[j] = motor ? motor->getAppliedImpulse(0) / w->dt : 0.0;
+        }
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_get_link_poses(const ss_world* w, int body, int count, double* poses) {
+    if (!w || (count > 0 && !poses)) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (count < 0 || count > mb->getNumLinks()) return fail(SS_ERR_LINK, "more links asked for than the body has");
+    SS_GUARD_BEGIN
+    for (int l = 0; l < count; ++l) {
+        const btTransform& tr = mb->getLink(l).m_cachedWorldTransform;
+        btQuaternion q = tr.getRotation();
+        for (int k = 0; k < 3; ++k) poses[7 * l + k] = tr.getOrigin()[k];
+        for (int k = 0; k < 4; ++k) poses[7 * l + 3 + k] = q[k];
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_get_contacts(const ss_world* w, int body, ss_contact* out, int capacity, int* count_out) {
+    if (!w || !count_out || (capacity > 0 && !out)) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    SS_GUARD_BEGIN
+    auto body_index = [&](const btMultiBody* m) {
+        for (size_t i = 0; i < w->bodies.size(); ++i)
+            if (w->bodies[i].get() == m) return (int)i;
+        return -1;
+    };
+    int count = 0;
+    btDispatcher* dispatcher = w->world->getDispatcher();
+    for (int m = 0; m < dispatcher->getNumManifolds(); ++m) {
+        const btPersistentManifold* manifold = dispatcher->getManifoldByIndexInternal(m);
+        const btMultiBodyLinkCollider* c0 = btMultiBodyLinkCollider::upcast(manifold->getBody0());
+        const btMultiBodyLinkCollider* c1 = btMultiBodyLinkCollider::upcast(manifold->getBody1());
+        bool ours0 = c0 && c0->m_multiBody == mb;
+        bool ours1 = c1 && c1->m_multiBody == mb;
+        if (!ours0 && !ours1) continue;
+        const btMultiBodyLinkCollider* self = ours0 ? c0 : c1;
+        const btMultiBodyLinkCollider* other = ours0 ? c1 : c0;
+        for (int p = 0; p < manifold->getNumContacts(); ++p) {
+            const btManifoldPoint& pt = manifold->getContactPoint(p);
+            if (count < capacity) {
+                ss_contact& c = out[count];
+                c.link = self->m_link;
+                c.other_body = other ? body_index(other->m_multiBody) : -1;
+                c.other_link = other ? other->m_link : -1;
+                // normalWorldOnB points from B towards A.
+                const btVector3& on_self = ours0 ? pt.m_positionWorldOnA : pt.m_positionWorldOnB;
+                const btVector3& on_other = ours0 ? pt.m_positionWorldOnB : pt.m_positionWorldOnA;
+                btVector3 normal = ours0 ? pt.m_normalWorldOnB : -pt.m_normalWorldOnB;
+                for (int k = 0; k < 3; ++k) {
+                    c.position_on_body[k] = on_self[k];
+                    c.position_on_other[k] = on_other[k];
+                    c.normal_on_other[k] = normal[k];
+                }
+                c.distance = pt.getDistance();
+                c.normal_force = pt.getAppliedImpulse() / w->dt;
+            }
+            ++count;
+        }
+    }
+    *count_out = count;
+    return SS_OK;
+    SS_GUARD_END
+}
+
+}  // extern "C"

@@ -1,0 +1,130 @@
+/*
+ * snake_shim.h: a thin C interface over Bullet's btMultiBody API that builds and steps a world the way
+ * pybullet 3.2.7 (p.connect(p.DIRECT)) does, so that a snake simulated through it moves bit for bit as
+ * pybullet's does. Every setting and call order follows ../shared/notes/pybullet-parity.md and the
+ * bullet3 sources it cites (PhysicsServerCommandProcessor.cpp, URDF2Bullet.cpp).
+ *
+ * Conventions:
+ * - Every function that can fail returns an int status: SS_OK (0) or a negative SS_ERR_* code; the text
+ *   of the most recent failure on the calling thread is available from ss_last_error().
+ * - No C++ exception crosses this boundary.
+ * - Bodies are numbered in creation order from 0 within one world; joints and links are numbered from 0
+ *   (link -1 is the base), as in pybullet.
+ * - Quaternions are (x, y, z, w).
+ */
+#ifndef SNAKE_SHIM_H
+#define SNAKE_SHIM_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SS_OK 0
+#define SS_ERR_NULL (-1)      /* a required pointer was NULL */
+#define SS_ERR_ARGUMENT (-2)  /* an argument is out of range or not finite */
+#define SS_ERR_BODY (-3)      /* no such body in this world */
+#define SS_ERR_LINK (-4)      /* no such link or joint on that body */
+#define SS_ERR_EXCEPTION (-5) /* Bullet or the C++ runtime threw (e.g. out of memory) */
+
+#define SS_POSITION_CONTROL 0 /* pybullet POSITION_CONTROL (CONTROL_MODE_POSITION_VELOCITY_PD) */
+#define SS_VELOCITY_CONTROL 1 /* pybullet VELOCITY_CONTROL */
+#define SS_TORQUE_CONTROL 2   /* pybullet TORQUE_CONTROL */
+
+typedef struct ss_world ss_world;
+
+/* A multibody of boxes that all share one box collision shape, joined by revolute joints, as
+ * pybullet's createMultiBody builds it from one GEOM_BOX shape. Inertial frames are the link frames. */
+typedef struct ss_chain_desc {
+    double half_extents[3];
+    double base_mass;          /* 0 makes a fixed base */
+    double base_position[3];   /* base COM position in world */
+    double base_orientation[4];
+    int num_links;
+    const double* link_masses;       /* num_links */
+    const double* link_positions;    /* 3 * num_links: joint frame in the parent's link frame */
+    const double* link_orientations; /* 4 * num_links */
+    const int* link_parents;         /* num_links; pybullet convention: 0 = base, k = link k - 1 */
+    const double* link_axes;         /* 3 * num_links: revolute axis in the link frame */
+} ss_chain_desc;
+
+/* pybullet changeDynamics: a field is applied only when "set" (>= 0 for scalars, flag != 0 otherwise),
+ * exactly as pybullet sends only the arguments given. */
+typedef struct ss_dynamics {
+    double lateral_friction;
+    double spinning_friction;
+    double rolling_friction;
+    double restitution;
+    double linear_damping;  /* whole body */
+    double angular_damping; /* whole body */
+    double joint_damping;   /* links only */
+    int has_anisotropic_friction;
+    double anisotropic_friction[3];
+    int friction_anchor; /* -1 leave as is, 0 clear, 1 set */
+} ss_dynamics;
+
+typedef struct ss_base_state {
+    double position[3];    /* base COM, world frame (getBasePositionAndOrientation) */
+    double orientation[4]; /* through pybullet's quaternion -> matrix -> quaternion round trip */
+    double linear_velocity[3];
+    double angular_velocity[3];
+} ss_base_state;
+
+typedef struct ss_contact {
+    int link;                  /* link of the queried body, -1 for its base */
+    int other_body;            /* body index of the other object, -1 if it is not a multibody */
+    int other_link;
+    double position_on_body[3];
+    double position_on_other[3];
+    double normal_on_other[3]; /* contact normal, pointing from the other object towards the body */
+    double distance;
+    double normal_force;       /* applied impulse / dt of the last step */
+} ss_contact;
+
+/* Text of the last failure on this thread ("" if none). Valid until the next failing call. */
+const char* ss_last_error(void);
+
+/* A new world as p.connect(p.DIRECT) makes it: dt 1/240, gravity 0, pybullet's solver settings. */
+ss_world* ss_world_new(void);
+void ss_world_free(ss_world* world);
+
+int ss_world_set_gravity(ss_world* world, double gx, double gy, double gz);
+int ss_world_set_time_step(ss_world* world, double dt);
+int ss_world_num_bodies(const ss_world* world, int* count);
+
+/* createMultiBody(0, createCollisionShape(GEOM_PLANE)): a static plane z = 0. */
+int ss_world_add_plane(ss_world* world, int* body_out);
+/* createMultiBody(...) with one box shape for every cube, then pybullet's default joint motors. */
+int ss_world_add_box_chain(ss_world* world, const ss_chain_desc* desc, int* body_out);
+
+int ss_body_num_joints(const ss_world* world, int body, int* count);
+/* changeDynamics(body, link, ...); link -1 is the base. */
+int ss_change_dynamics(ss_world* world, int body, int link, const ss_dynamics* dynamics);
+
+/* setJointMotorControl2(body, joint, mode, targetPosition, targetVelocity, force, positionGain,
+ * velocityGain, maxVelocity); max_velocity <= 0 means "not given". For SS_TORQUE_CONTROL, force is the
+ * torque added until the end of the next step. */
+int ss_set_joint_motor(ss_world* world, int body, int joint, int mode, double target_position,
+                       double target_velocity, double force, double kp, double kd, double max_velocity);
+/* POSITION_CONTROL with target velocity 0 on joints 0..count-1: the same effect as count calls of
+ * ss_set_joint_motor, in one crossing. */
+int ss_set_position_targets(ss_world* world, int body, int count, const double* targets, double force,
+                            double kp, double kd);
+
+/* p.stepSimulation(): joint damping torques, then one internal step of dt. */
+int ss_world_step(ss_world* world);
+
+int ss_get_base_state(const ss_world* world, int body, ss_base_state* out);
+/* getJointStates for joints 0..count-1; any output pointer may be NULL. applied_torque is the motor's
+ * applied impulse / dt, as pybullet reports it. */
+int ss_get_joint_states(const ss_world* world, int body, int count, double* positions,
+                        double* velocities, double* applied_torques);
+/* World pose of each link's COM frame, 7 values (x, y, z, qx, qy, qz, qw) per link 0..count-1. */
+int ss_get_link_poses(const ss_world* world, int body, int count, double* poses);
+/* Contact points of the last step that involve `body`, up to `capacity`; *count_out is the total. */
+int ss_get_contacts(const ss_world* world, int body, ss_contact* out, int capacity, int* count_out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SNAKE_SHIM_H */

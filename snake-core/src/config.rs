@@ -1,0 +1,154 @@
+//! Physical parameters of the snake and the two presets.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{invalid, Result};
+
+/// Every physical parameter of the simulated snake, with the paper's defaults.
+///
+/// The snake is `joints + 1` cubes in a row along +y (the base first, the tail last), joined by
+/// revolute joints about z so that it bends in the ground plane.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SnakeConfig {
+    /// Number of joints N (the snake has N + 1 cubes). At least 1.
+    pub joints: usize,
+    /// Half extent of each cube, metres (0.25: 0.5 m cubes).
+    pub half_extent: f64,
+    /// Gap between neighbouring cubes, metres (0.01: joint frames 0.51 m apart).
+    pub link_gap: f64,
+    /// Mass of the base (head) cube, kg.
+    pub base_mass: f64,
+    /// Mass of every other cube, kg.
+    pub link_mass: f64,
+    /// Lateral friction of every cube (the plane keeps pybullet's 0.5, so contacts use 2.5).
+    pub lateral_friction: f64,
+    /// Anisotropic friction of every cube, in its own frame.
+    pub anisotropic_friction: [f64; 3],
+    /// Largest torque of each position-controlled joint motor, N m.
+    pub motor_force: f64,
+    /// Position gain of the motors (pybullet's default).
+    pub position_gain: f64,
+    /// Velocity gain of the motors (pybullet's default).
+    pub velocity_gain: f64,
+    /// Gravity along z, m/s².
+    pub gravity: f64,
+    /// Physics time step, seconds.
+    pub dt: f64,
+}
+
+impl Default for SnakeConfig {
+    fn default() -> Self {
+        Preset::Paper.config(5)
+    }
+}
+
+/// Named parameter sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// The paper's text: every cube 0.06 kg.
+    Paper,
+    /// The paper's published code (snakebot-gym): base 0.06 kg, every link 1.0 kg.
+    SnakebotGym,
+}
+
+impl Preset {
+    /// All presets, for listings.
+    pub const ALL: [Preset; 2] = [Preset::Paper, Preset::SnakebotGym];
+
+    /// The preset's name as the CLI and Python accept it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Paper => "paper",
+            Preset::SnakebotGym => "snakebot-gym",
+        }
+    }
+
+    /// The configuration for a snake of `joints` joints.
+    pub fn config(self, joints: usize) -> SnakeConfig {
+        let link_mass = match self {
+            Preset::Paper => 0.06,
+            Preset::SnakebotGym => 1.0,
+        };
+        SnakeConfig {
+            joints,
+            half_extent: 0.25,
+            link_gap: 0.01,
+            base_mass: 0.06,
+            link_mass,
+            lateral_friction: 5.0,
+            anisotropic_friction: [1.0, 0.01, 0.01],
+            motor_force: 10.0,
+            position_gain: 0.1,
+            velocity_gain: 1.0,
+            gravity: -9.81,
+            dt: 1.0 / 240.0,
+        }
+    }
+}
+
+impl std::str::FromStr for Preset {
+    type Err = crate::Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Preset::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| invalid(format!("unknown preset '{s}' (expected one of: paper, snakebot-gym)")))
+    }
+}
+
+impl std::fmt::Display for Preset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl SnakeConfig {
+    /// Distance between neighbouring joint frames along the body, metres.
+    pub fn link_spacing(&self) -> f64 {
+        // Computed as the reference code writes it: half extent * 2.0 + gap.
+        self.half_extent * 2.0 + self.link_gap
+    }
+
+    /// Checks every parameter; the error names the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        if self.joints < 1 {
+            return Err(invalid(format!("joints must be at least 1, got {}", self.joints)));
+        }
+        if self.joints > 512 {
+            return Err(invalid(format!("joints must be at most 512, got {}", self.joints)));
+        }
+        let positive = [
+            ("half_extent", self.half_extent),
+            ("base_mass", self.base_mass),
+            ("link_mass", self.link_mass),
+            ("dt", self.dt),
+        ];
+        for (name, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(invalid(format!("{name} must be positive and finite, got {value}")));
+            }
+        }
+        let non_negative = [
+            ("link_gap", self.link_gap),
+            ("lateral_friction", self.lateral_friction),
+            ("motor_force", self.motor_force),
+            ("position_gain", self.position_gain),
+            ("velocity_gain", self.velocity_gain),
+        ];
+        for (name, value) in non_negative {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(invalid(format!("{name} must be finite and >= 0, got {value}")));
+            }
+        }
+        if !self.gravity.is_finite() {
+            return Err(invalid(format!("gravity must be finite, got {}", self.gravity)));
+        }
+        if !self.anisotropic_friction.iter().all(|a| a.is_finite() && *a >= 0.0) {
+            return Err(invalid("anisotropic_friction must be finite and >= 0"));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,43 @@
+//! The one error type of the crate.
+
+use std::ffi::CStr;
+
+/// Everything that can go wrong in snake-core.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// A caller-supplied value is out of range, not finite or of the wrong size.
+    #[error("invalid argument: {0}")]
+    InvalidArgument(String),
+    /// Bullet refused a call (the shim's message is kept).
+    #[error("physics engine error ({code}): {message}")]
+    Engine {
+        /// The shim's status code (`SS_ERR_*`).
+        code: i32,
+        /// The shim's description of the failure.
+        message: String,
+    },
+    /// The simulation produced a non-finite state (it blew up); the world should be discarded.
+    #[error("simulation became non-finite: {0}")]
+    NonFinite(String),
+}
+
+/// Shorthand for `Result<T, snake_core::Error>`.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Turns a shim status code into a `Result`, fetching the shim's message on failure.
+pub(crate) fn check(code: i32) -> Result<()> {
+    if code == bullet_sys::SS_OK as i32 {
+        return Ok(());
+    }
+    // SAFETY: ss_last_error returns a NUL-terminated thread-local string that lives until the next
+    // failing call on this thread; it is copied out immediately.
+    let message = unsafe { CStr::from_ptr(bullet_sys::ss_last_error()) }
+        .to_string_lossy()
+        .into_owned();
+    Err(Error::Engine { code, message })
+}
+
+/// An `InvalidArgument` error from anything printable.
+pub(crate) fn invalid(message: impl Into<String>) -> Error {
+    Error::InvalidArgument(message.into())
+}

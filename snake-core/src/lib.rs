@@ -1,0 +1,43 @@
+//! # snake-core
+//!
+//! The snake robot of "Simulating Snakes" on the Bullet physics engine, built and stepped so that it
+//! moves bit for bit as the pybullet 3.2.7 reference does: a chain of `N + 1` cubes joined by `N`
+//! position-controlled revolute joints about z, with anisotropic friction against a ground plane.
+//!
+//! - [`world`]: a Bullet world with pybullet's settings (bodies, dynamics, joint control, state reads).
+//! - [`config`]: [`SnakeConfig`], every physical parameter, and the [`Preset`]s `paper` (every cube
+//!   0.06 kg) and `snakebot-gym` (the paper's code: links 1.0 kg).
+//! - [`snake`]: [`Snake`], the robot on its ground plane.
+//! - [`gait`]: the [`Gait`] trait and [`LateralUndulation`], pybullet's snake.py wave.
+//!
+//! ```
+//! use snake_core::{Gait, LateralUndulation, Preset, Snake, StartPose};
+//!
+//! let config = Preset::Paper.config(5);
+//! let mut snake = Snake::new(&config, StartPose::resting(config.half_extent))?;
+//! let mut gait = LateralUndulation::default();
+//! let mut targets = vec![0.0; snake.joints()];
+//! for _ in 0..240 {
+//!     gait.next_targets(&mut targets);
+//!     snake.set_targets(&targets)?;
+//!     snake.step()?;
+//! }
+//! let head = snake.base_state()?.pose.position;
+//! assert!(head.y < 0.0, "the snake moves head first, towards -y");
+//! # Ok::<(), snake_core::Error>(())
+//! ```
+#![deny(missing_docs)]
+
+pub mod config;
+pub mod error;
+pub mod gait;
+pub mod math;
+pub mod snake;
+pub mod world;
+
+pub use config::{Preset, SnakeConfig};
+pub use error::{Error, Result};
+pub use gait::{Gait, GaitKind, LateralUndulation};
+pub use math::{quaternion_from_euler, StartPose};
+pub use snake::Snake;
+pub use world::{BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose, World};

@@ -1,0 +1,506 @@
+//! A physics world that behaves as a pybullet 3.2.7 `p.connect(p.DIRECT)` server does.
+//!
+//! [`World`] owns its Bullet objects and frees them on drop. It exposes the handful of pybullet calls
+//! the snake needs (createMultiBody for a plane and for a chain of boxes, changeDynamics,
+//! setJointMotorControl2, stepSimulation and the state reads) with pybullet's defaults and semantics.
+
+use std::ptr::NonNull;
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use crate::error::{check, invalid, Error, Result};
+
+/// Index of a body within its [`World`], in creation order (pybullet's body unique id).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct BodyId(pub(crate) i32);
+
+impl BodyId {
+    /// The body's index in creation order.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// A rigid pose: position and orientation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    /// Position in metres.
+    pub position: Vector3<f64>,
+    /// Orientation. Stored exactly as Bullet returns it (normalised only to rounding).
+    pub orientation: UnitQuaternion<f64>,
+}
+
+impl Pose {
+    /// Heading: rotation about the world z axis, in radians, of the pose's x axis.
+    pub fn yaw(&self) -> f64 {
+        self.orientation.euler_angles().2
+    }
+}
+
+/// State of a body's base: pose of its centre of mass and its velocities, all in the world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaseState {
+    /// Pose of the base's centre of mass (pybullet's `getBasePositionAndOrientation`).
+    pub pose: Pose,
+    /// Linear velocity in m/s.
+    pub linear_velocity: Vector3<f64>,
+    /// Angular velocity in rad/s.
+    pub angular_velocity: Vector3<f64>,
+}
+
+/// State of one joint after the last step (pybullet's `getJointState`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct JointState {
+    /// Angle in radians.
+    pub position: f64,
+    /// Angular velocity in rad/s.
+    pub velocity: f64,
+    /// Torque the joint motor applied during the last step, in N m.
+    pub motor_torque: f64,
+}
+
+/// One contact point of a body, from the last step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Link of the queried body (-1 for its base).
+    pub link: i32,
+    /// The other body, if it is one of this world's multibodies.
+    pub other_body: Option<BodyId>,
+    /// Link of the other body (-1 for its base).
+    pub other_link: i32,
+    /// Contact position on the queried body, world frame.
+    pub position_on_body: Vector3<f64>,
+    /// Contact position on the other object, world frame.
+    pub position_on_other: Vector3<f64>,
+    /// Contact normal, from the other object towards the queried body.
+    pub normal: Vector3<f64>,
+    /// Signed distance (negative when penetrating), in metres.
+    pub distance: f64,
+    /// Normal force of the last step, in newtons.
+    pub normal_force: f64,
+}
+
+/// How a joint motor is driven (pybullet's control modes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointControl {
+    /// `POSITION_CONTROL`: a PD servo on angle and velocity, limited to `max_force`.
+    Position {
+        /// Target angle, radians.
+        target: f64,
+        /// Target velocity, rad/s (pybullet's default 0).
+        target_velocity: f64,
+        /// Largest torque the motor may apply, N m.
+        max_force: f64,
+        /// Position gain (pybullet's default 0.1).
+        kp: f64,
+        /// Velocity gain (pybullet's default 1.0).
+        kd: f64,
+        /// Clamp on the motor's target velocity; `None` leaves it as it was (unclamped by default).
+        max_velocity: Option<f64>,
+    },
+    /// `VELOCITY_CONTROL`: drive to a velocity, limited to `max_force`.
+    Velocity {
+        /// Target velocity, rad/s.
+        target_velocity: f64,
+        /// Largest torque the motor may apply, N m (0 switches the motor off).
+        max_force: f64,
+        /// Velocity gain (pybullet's default 1.0).
+        kd: f64,
+    },
+    /// `TORQUE_CONTROL`: add this torque (N m) during the next step. The default motors stay active
+    /// until switched off with `Velocity { max_force: 0.0, .. }`, as in pybullet.
+    Torque(f64),
+}
+
+impl JointControl {
+    /// Position control with pybullet's default gains (kp 0.1, kd 1.0) and target velocity 0.
+    pub fn position(target: f64, max_force: f64) -> Self {
+        JointControl::Position {
+            target,
+            target_velocity: 0.0,
+            max_force,
+            kp: 0.1,
+            kd: 1.0,
+            max_velocity: None,
+        }
+    }
+}
+
+/// pybullet `changeDynamics` arguments; `None` leaves a property as it is.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Dynamics {
+    /// Coulomb friction coefficient (multiplied with the other object's).
+    pub lateral_friction: Option<f64>,
+    /// Torsional friction about the contact normal.
+    pub spinning_friction: Option<f64>,
+    /// Rolling friction.
+    pub rolling_friction: Option<f64>,
+    /// Coefficient of restitution.
+    pub restitution: Option<f64>,
+    /// Per-axis scaling of friction in the link's own frame.
+    pub anisotropic_friction: Option<[f64; 3]>,
+    /// Friction anchors (contact points keep their anchor while static).
+    pub friction_anchor: Option<bool>,
+    /// Viscous joint damping, N m s/rad (links only).
+    pub joint_damping: Option<f64>,
+    /// Linear damping of the whole body (Bullet default 0.04).
+    pub linear_damping: Option<f64>,
+    /// Angular damping of the whole body (Bullet default 0.04).
+    pub angular_damping: Option<f64>,
+}
+
+/// A tree of equal boxes joined by revolute joints, as pybullet's `createMultiBody` makes it from one
+/// `GEOM_BOX` collision shape. Inertial frames are the link frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxChain {
+    /// Box half extents, metres.
+    pub half_extents: [f64; 3],
+    /// Base mass in kg; 0 fixes the base in place.
+    pub base_mass: f64,
+    /// Base pose in the world.
+    pub base_position: [f64; 3],
+    /// Base orientation as (x, y, z, w).
+    pub base_orientation: [f64; 4],
+    /// The links, in pybullet's order.
+    pub links: Vec<BoxLink>,
+}
+
+/// One link of a [`BoxChain`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoxLink {
+    /// Mass in kg.
+    pub mass: f64,
+    /// Joint frame position in the parent link's frame.
+    pub position: [f64; 3],
+    /// Joint frame orientation (x, y, z, w) in the parent link's frame.
+    pub orientation: [f64; 4],
+    /// Parent: `None` for the base, `Some(k)` for link k (which must come earlier).
+    pub parent: Option<usize>,
+    /// Revolute joint axis in the link frame.
+    pub axis: [f64; 3],
+}
+
+/// A Bullet world set up as pybullet sets one up.
+///
+/// A new world has no bodies, gravity 0 (as pybullet's) and a time step of 1/240 s.
+pub struct World {
+    raw: NonNull<bullet_sys::ss_world>,
+    time_step: f64,
+    /// Joint count per body, to size reads without crossing the boundary.
+    joints: Vec<usize>,
+}
+
+// SAFETY: a World exclusively owns its Bullet objects, which reference no other world's; the shim
+// replaces Bullet's process-wide profiler hooks with no-ops and sets its one global (gDbvtMargin) to a
+// constant before the first world exists, so a World may move to another thread.
+unsafe impl Send for World {}
+
+impl Drop for World {
+    fn drop(&mut self) {
+        // SAFETY: raw came from ss_world_new and is freed exactly once, here.
+        unsafe { bullet_sys::ss_world_free(self.raw.as_ptr()) }
+    }
+}
+
+impl std::fmt::Debug for World {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("World")
+            .field("time_step", &self.time_step)
+            .field("bodies", &self.joints.len())
+            .finish()
+    }
+}
+
+fn finite(values: &[f64], what: &str) -> Result<()> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(invalid(format!("{what} must be finite")))
+    }
+}
+
+impl World {
+    /// An empty world as `p.connect(p.DIRECT)` creates it.
+    pub fn new() -> Result<Self> {
+        // SAFETY: ss_world_new has no preconditions; a null return is an allocation failure.
+        let raw = unsafe { bullet_sys::ss_world_new() };
+        let raw = NonNull::new(raw).ok_or_else(|| Error::Engine {
+            code: bullet_sys::SS_ERR_EXCEPTION,
+            message: "could not create a Bullet world".into(),
+        })?;
+        Ok(World {
+            raw,
+            time_step: 1.0 / 240.0,
+            joints: Vec::new(),
+        })
+    }
+
+    fn ptr(&self) -> *mut bullet_sys::ss_world {
+        self.raw.as_ptr()
+    }
+
+    /// `setGravity`.
+    pub fn set_gravity(&mut self, gravity: Vector3<f64>) -> Result<()> {
+        finite(gravity.as_slice(), "gravity")?;
+        // SAFETY: self.ptr() is a live world owned by self.
+        check(unsafe { bullet_sys::ss_world_set_gravity(self.ptr(), gravity.x, gravity.y, gravity.z) })
+    }
+
+    /// `setTimeStep`: seconds per [`World::step`].
+    pub fn set_time_step(&mut self, dt: f64) -> Result<()> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(invalid(format!("time step must be positive and finite, got {dt}")));
+        }
+        // SAFETY: live world owned by self.
+        check(unsafe { bullet_sys::ss_world_set_time_step(self.ptr(), dt) })?;
+        self.time_step = dt;
+        Ok(())
+    }
+
+    /// Seconds per step.
+    pub fn time_step(&self) -> f64 {
+        self.time_step
+    }
+
+    /// Adds the ground: `createMultiBody(0, createCollisionShape(GEOM_PLANE))`, the plane z = 0.
+    pub fn add_plane(&mut self) -> Result<BodyId> {
+        let mut id = 0;
+        // SAFETY: live world; id is a valid out pointer.
+        check(unsafe { bullet_sys::ss_world_add_plane(self.ptr(), &mut id) })?;
+        self.joints.push(0);
+        Ok(BodyId(id))
+    }
+
+    /// Adds a tree of boxes (see [`BoxChain`]) with pybullet's default joint motors.
+    pub fn add_box_chain(&mut self, chain: &BoxChain) -> Result<BodyId> {
+        let n = chain.links.len();
+        let mut masses = Vec::with_capacity(n);
+        let mut positions = Vec::with_capacity(3 * n);
+        let mut orientations = Vec::with_capacity(4 * n);
+        let mut parents = Vec::with_capacity(n);
+        let mut axes = Vec::with_capacity(3 * n);
+        for (i, link) in chain.links.iter().enumerate() {
+            let parent = match link.parent {
+                None => 0,
+                Some(p) if p < i => p as i32 + 1,
+                Some(p) => return Err(invalid(format!("link {i} has parent {p}, which is not an earlier link"))),
+            };
+            masses.push(link.mass);
+            positions.extend_from_slice(&link.position);
+            orientations.extend_from_slice(&link.orientation);
+            parents.push(parent);
+            axes.extend_from_slice(&link.axis);
+        }
+        let num_links = i32::try_from(n).map_err(|_| invalid("too many links"))?;
+        let desc = bullet_sys::ss_chain_desc {
+            half_extents: chain.half_extents,
+            base_mass: chain.base_mass,
+            base_position: chain.base_position,
+            base_orientation: chain.base_orientation,
+            num_links,
+            link_masses: masses.as_ptr(),
+            link_positions: positions.as_ptr(),
+            link_orientations: orientations.as_ptr(),
+            link_parents: parents.as_ptr(),
+            link_axes: axes.as_ptr(),
+        };
+        let mut id = 0;
+        // SAFETY: live world; desc's arrays hold num_links entries each and outlive the call.
+        check(unsafe { bullet_sys::ss_world_add_box_chain(self.ptr(), &desc, &mut id) })?;
+        self.joints.push(n);
+        Ok(BodyId(id))
+    }
+
+    fn joint_count(&self, body: BodyId) -> Result<usize> {
+        self.joints
+            .get(body.index())
+            .copied()
+            .ok_or_else(|| invalid(format!("no body {}", body.0)))
+    }
+
+    /// Number of joints (= links) of a body.
+    pub fn num_joints(&self, body: BodyId) -> Result<usize> {
+        self.joint_count(body)
+    }
+
+    /// `changeDynamics(body, link, ...)`; `link` `None` is the base.
+    pub fn change_dynamics(&mut self, body: BodyId, link: Option<usize>, dynamics: &Dynamics) -> Result<()> {
+        let unset = -1.0;
+        let nonneg = |v: Option<f64>, what: &str| -> Result<f64> {
+            match v {
+                None => Ok(unset),
+                Some(x) if x.is_finite() && x >= 0.0 => Ok(x),
+                Some(x) => Err(invalid(format!("{what} must be finite and >= 0, got {x}"))),
+            }
+        };
+        let raw = bullet_sys::ss_dynamics {
+            lateral_friction: nonneg(dynamics.lateral_friction, "lateral friction")?,
+            spinning_friction: nonneg(dynamics.spinning_friction, "spinning friction")?,
+            rolling_friction: nonneg(dynamics.rolling_friction, "rolling friction")?,
+            restitution: nonneg(dynamics.restitution, "restitution")?,
+            linear_damping: nonneg(dynamics.linear_damping, "linear damping")?,
+            angular_damping: nonneg(dynamics.angular_damping, "angular damping")?,
+            joint_damping: nonneg(dynamics.joint_damping, "joint damping")?,
+            has_anisotropic_friction: dynamics.anisotropic_friction.is_some() as i32,
+            anisotropic_friction: match dynamics.anisotropic_friction {
+                Some(a) => {
+                    finite(&a, "anisotropic friction")?;
+                    a
+                }
+                None => [1.0; 3],
+            },
+            friction_anchor: dynamics.friction_anchor.map_or(-1, i32::from),
+        };
+        let link = match link {
+            None => -1,
+            Some(l) if l < self.joint_count(body)? => l as i32,
+            Some(l) => return Err(invalid(format!("body {} has no link {l}", body.0))),
+        };
+        // SAFETY: live world; raw is a valid struct for the duration of the call.
+        check(unsafe { bullet_sys::ss_change_dynamics(self.ptr(), body.0, link, &raw) })
+    }
+
+    /// `setJointMotorControl2` on one joint.
+    pub fn set_joint_control(&mut self, body: BodyId, joint: usize, control: JointControl) -> Result<()> {
+        if joint >= self.joint_count(body)? {
+            return Err(invalid(format!("body {} has no joint {joint}", body.0)));
+        }
+        let (mode, pos, vel, force, kp, kd, max_vel) = match control {
+            JointControl::Position {
+                target,
+                target_velocity,
+                max_force,
+                kp,
+                kd,
+                max_velocity,
+            } => (
+                bullet_sys::SS_POSITION_CONTROL,
+                target,
+                target_velocity,
+                max_force,
+                kp,
+                kd,
+                max_velocity.unwrap_or(-1.0),
+            ),
+            JointControl::Velocity {
+                target_velocity,
+                max_force,
+                kd,
+            } => (bullet_sys::SS_VELOCITY_CONTROL, 0.0, target_velocity, max_force, 0.0, kd, -1.0),
+            JointControl::Torque(t) => (bullet_sys::SS_TORQUE_CONTROL, 0.0, 0.0, t, 0.0, 0.0, -1.0),
+        };
+        finite(&[pos, vel, force, kp, kd, max_vel], "joint control values")?;
+        // SAFETY: live world; joint index checked above.
+        check(unsafe {
+            bullet_sys::ss_set_joint_motor(self.ptr(), body.0, joint as i32, mode as i32, pos, vel, force, kp, kd, max_vel)
+        })
+    }
+
+    /// Position control with target velocity 0 on joints `0..targets.len()`, in one call: the same
+    /// effect as [`World::set_joint_control`] with [`JointControl::Position`] on each joint.
+    pub fn set_position_targets(&mut self, body: BodyId, targets: &[f64], max_force: f64, kp: f64, kd: f64) -> Result<()> {
+        let n = self.joint_count(body)?;
+        if targets.len() > n {
+            return Err(invalid(format!("{} targets for {n} joints", targets.len())));
+        }
+        finite(targets, "joint targets")?;
+        finite(&[max_force, kp, kd], "motor force and gains")?;
+        // SAFETY: live world; targets holds targets.len() values.
+        check(unsafe {
+            bullet_sys::ss_set_position_targets(self.ptr(), body.0, targets.len() as i32, targets.as_ptr(), max_force, kp, kd)
+        })
+    }
+
+    /// `stepSimulation()`: one step of [`World::time_step`] seconds.
+    pub fn step(&mut self) -> Result<()> {
+        // SAFETY: live world owned by self.
+        check(unsafe { bullet_sys::ss_world_step(self.ptr()) })
+    }
+
+    /// The base's pose and velocity.
+    pub fn base_state(&self, body: BodyId) -> Result<BaseState> {
+        self.joint_count(body)?;
+        let mut raw = bullet_sys::ss_base_state::default();
+        // SAFETY: live world; raw is a valid out struct.
+        check(unsafe { bullet_sys::ss_get_base_state(self.ptr(), body.0, &mut raw) })?;
+        let [x, y, z, w] = raw.orientation;
+        Ok(BaseState {
+            pose: Pose {
+                position: Vector3::from(raw.position),
+                // Bullet's quaternion is kept bit for bit, not renormalised.
+                orientation: UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)),
+            },
+            linear_velocity: Vector3::from(raw.linear_velocity),
+            angular_velocity: Vector3::from(raw.angular_velocity),
+        })
+    }
+
+    /// Angles, velocities and motor torques of every joint, written into the given slices, which must
+    /// each be as long as the body has joints (pass an empty slice to skip one).
+    pub fn read_joints(&self, body: BodyId, positions: &mut [f64], velocities: &mut [f64], torques: &mut [f64]) -> Result<()> {
+        let n = self.joint_count(body)?;
+        let out = |s: &mut [f64], what: &str| -> Result<*mut f64> {
+            match s.len() {
+                0 => Ok(std::ptr::null_mut()),
+                len if len == n => Ok(s.as_mut_ptr()),
+                len => Err(invalid(format!("{what}: slice of {len} for {n} joints"))),
+            }
+        };
+        let (p, v, t) = (out(positions, "positions")?, out(velocities, "velocities")?, out(torques, "torques")?);
+        // SAFETY: live world; every non-null pointer addresses n writable f64.
+        check(unsafe { bullet_sys::ss_get_joint_states(self.ptr(), body.0, n as i32, p, v, t) })
+    }
+
+    /// Every joint's state.
+    pub fn joint_states(&self, body: BodyId) -> Result<Vec<JointState>> {
+        let n = self.joint_count(body)?;
+        let (mut p, mut v, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        self.read_joints(body, &mut p, &mut v, &mut t)?;
+        Ok((0..n)
+            .map(|j| JointState {
+                position: p[j],
+                velocity: v[j],
+                motor_torque: t[j],
+            })
+            .collect())
+    }
+
+    /// World pose of every link's centre of mass (the base not included).
+    pub fn link_poses(&self, body: BodyId) -> Result<Vec<Pose>> {
+        let n = self.joint_count(body)?;
+        let mut raw = vec![0.0; 7 * n];
+        // SAFETY: live world; raw holds 7 * n writable f64.
+        check(unsafe { bullet_sys::ss_get_link_poses(self.ptr(), body.0, n as i32, raw.as_mut_ptr()) })?;
+        Ok(raw
+            .chunks_exact(7)
+            .map(|c| Pose {
+                position: Vector3::new(c[0], c[1], c[2]),
+                orientation: UnitQuaternion::new_unchecked(Quaternion::new(c[6], c[3], c[4], c[5])),
+            })
+            .collect())
+    }
+
+    /// Contact points of the last step that involve `body`.
+    pub fn contacts(&self, body: BodyId) -> Result<Vec<Contact>> {
+        self.joint_count(body)?;
+        let mut count = 0;
+        // SAFETY: live world; capacity 0 with a null buffer only counts.
+        check(unsafe { bullet_sys::ss_get_contacts(self.ptr(), body.0, std::ptr::null_mut(), 0, &mut count) })?;
+        let mut raw = vec![bullet_sys::ss_contact::default(); count.max(0) as usize];
+        // SAFETY: raw has room for `count` contacts; nothing stepped in between.
+        check(unsafe { bullet_sys::ss_get_contacts(self.ptr(), body.0, raw.as_mut_ptr(), count, &mut count) })?;
+        Ok(raw
+            .iter()
+            .map(|c| Contact {
+                link: c.link,
+                other_body: (c.other_body >= 0).then_some(BodyId(c.other_body)),
+                other_link: c.other_link,
+                position_on_body: Vector3::from(c.position_on_body),
+                position_on_other: Vector3::from(c.position_on_other),
+                normal: Vector3::from(c.normal_on_other),
+                distance: c.distance,
+                normal_force: c.normal_force,
+            })
+            .collect())
+    }
+}
