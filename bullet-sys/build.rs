@@ -4,7 +4,8 @@
 use std::env;
 use std::path::PathBuf;
 
-const INSTALL_HINT: &str = "Bullet (double precision) was not found through pkg-config `bullet-float64`.\n\
+const INSTALL_HINT: &str =
+    "Bullet (double precision) was not found through pkg-config `bullet-float64`.\n\
      Install it with: sudo apt-get install libbullet-dev pkg-config\n\
      (bindgen also needs libclang: sudo apt-get install libclang-dev)";
 

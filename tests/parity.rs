@@ -45,9 +45,23 @@ fn gait_resting_and_dropped_for_every_size_and_preset() {
 
 #[test]
 fn steered_gait() {
-    let mut left = Scenario::new("steer-left", 8, "paper", [0.0, 0.0, 0.25, 0.0], TEN_SECONDS, "gait");
+    let mut left = Scenario::new(
+        "steer-left",
+        8,
+        "paper",
+        [0.0, 0.0, 0.25, 0.0],
+        TEN_SECONDS,
+        "gait",
+    );
     left.control.steering = Some(0.2);
-    let mut right = Scenario::new("steer-right", 8, "snakebot-gym", [1.0, 2.0, 0.5, -0.4], TEN_SECONDS, "gait");
+    let mut right = Scenario::new(
+        "steer-right",
+        8,
+        "snakebot-gym",
+        [1.0, 2.0, 0.5, -0.4],
+        TEN_SECONDS,
+        "gait",
+    );
     right.control.steering = Some(-0.2);
     check("steer", vec![left, right]);
 }
@@ -55,8 +69,22 @@ fn steered_gait() {
 #[test]
 fn lying_still_under_zero_targets() {
     let scenarios = vec![
-        Scenario::new("still-5", 5, "paper", [0.0, 0.0, 0.25, 0.0], TEN_SECONDS, "zero"),
-        Scenario::new("still-10-drop", 10, "snakebot-gym", [0.0, 0.0, 0.5, 1.0], TEN_SECONDS, "zero"),
+        Scenario::new(
+            "still-5",
+            5,
+            "paper",
+            [0.0, 0.0, 0.25, 0.0],
+            TEN_SECONDS,
+            "zero",
+        ),
+        Scenario::new(
+            "still-10-drop",
+            10,
+            "snakebot-gym",
+            [0.0, 0.0, 0.5, 1.0],
+            TEN_SECONDS,
+            "zero",
+        ),
     ];
     check("still", scenarios.clone());
     // And it does lie still: resting on the plane, creeping by no more than the solver's own creep
@@ -66,7 +94,12 @@ fn lying_still_under_zero_targets() {
         let last = rows.last().unwrap();
         let drift = (last[2] - s.start[0]).hypot(last[3] - s.start[1]);
         assert!(drift < 5e-3, "{}: drifted {drift} m", s.name);
-        assert!((last[4] - 0.25).abs() < 1e-4, "{}: base height {}", s.name, last[4]);
+        assert!(
+            (last[4] - 0.25).abs() < 1e-4,
+            "{}: base height {}",
+            s.name,
+            last[4]
+        );
     }
 }
 
@@ -77,7 +110,14 @@ fn each_control_mode() {
     position.control.kp = Some(0.3);
     position.control.kd = Some(0.6);
     position.control.force = Some(7.0);
-    let mut clamped = Scenario::new("position-clamped", 6, "snakebot-gym", start, TEN_SECONDS, "position");
+    let mut clamped = Scenario::new(
+        "position-clamped",
+        6,
+        "snakebot-gym",
+        start,
+        TEN_SECONDS,
+        "position",
+    );
     clamped.control.kp = Some(0.2);
     clamped.control.kd = Some(1.0);
     clamped.control.max_velocity = Some(2.0);
@@ -93,18 +133,31 @@ fn each_control_mode() {
 fn each_friction_setting() {
     let settings: Vec<(&str, serde_json::Value)> = vec![
         ("lateral", serde_json::json!({"lateralFriction": 1.3})),
-        ("anisotropic", serde_json::json!({"anisotropicFriction": [0.5, 0.05, 1.0]})),
+        (
+            "anisotropic",
+            serde_json::json!({"anisotropicFriction": [0.5, 0.05, 1.0]}),
+        ),
         ("spinning", serde_json::json!({"spinningFriction": 0.05})),
         ("rolling", serde_json::json!({"rollingFriction": 0.02})),
         ("restitution", serde_json::json!({"restitution": 0.4})),
         ("anchor", serde_json::json!({"frictionAnchor": 1})),
         ("joint-damping", serde_json::json!({"jointDamping": 0.3})),
-        ("body-damping", serde_json::json!({"linearDamping": 0.1, "angularDamping": 0.2})),
+        (
+            "body-damping",
+            serde_json::json!({"linearDamping": 0.1, "angularDamping": 0.2}),
+        ),
     ];
     let scenarios = settings
         .into_iter()
         .map(|(name, dynamics)| {
-            let mut s = Scenario::new(format!("friction-{name}"), 5, "paper", [0.0, 0.0, 0.5, 0.2], TEN_SECONDS, "gait");
+            let mut s = Scenario::new(
+                format!("friction-{name}"),
+                5,
+                "paper",
+                [0.0, 0.0, 0.5, 0.2],
+                TEN_SECONDS,
+                "gait",
+            );
             s.dynamics = serde_json::from_value(dynamics).unwrap();
             s
         })

@@ -55,7 +55,14 @@ pub struct Control {
 
 impl Scenario {
     /// A scenario driven by `mode` with everything else at its default.
-    pub fn new(name: impl Into<String>, joints: usize, preset: &str, start: [f64; 4], steps: u64, mode: &str) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        joints: usize,
+        preset: &str,
+        start: [f64; 4],
+        steps: u64,
+        mode: &str,
+    ) -> Self {
         Scenario {
             name: name.into(),
             joints,
@@ -81,7 +88,11 @@ fn signal(step: u64, joint: usize, amplitude: f64) -> f64 {
 fn dynamics_from(keywords: &BTreeMap<String, serde_json::Value>) -> Dynamics {
     let mut d = Dynamics::default();
     for (key, value) in keywords {
-        let num = || value.as_f64().unwrap_or_else(|| panic!("{key} must be a number"));
+        let num = || {
+            value
+                .as_f64()
+                .unwrap_or_else(|| panic!("{key} must be a number"))
+        };
         match key.as_str() {
             "lateralFriction" => d.lateral_friction = Some(num()),
             "spinningFriction" => d.spinning_friction = Some(num()),
@@ -112,7 +123,10 @@ pub fn run_ours(s: &Scenario) -> Vec<Vec<f64>> {
     if !s.dynamics.is_empty() {
         let d = dynamics_from(&s.dynamics);
         for link in std::iter::once(None).chain((0..n).map(Some)) {
-            snake.world_mut().change_dynamics(body, link, &d).expect("changeDynamics");
+            snake
+                .world_mut()
+                .change_dynamics(body, link, &d)
+                .expect("changeDynamics");
         }
     }
     let c = &s.control;
@@ -135,7 +149,10 @@ pub fn run_ours(s: &Scenario) -> Vec<Vec<f64>> {
         match c.mode.as_str() {
             "gait" => {
                 gait.next_targets(&mut targets);
-                snake.world_mut().set_position_targets(body, &targets, force, 0.1, 1.0).unwrap();
+                snake
+                    .world_mut()
+                    .set_position_targets(body, &targets, force, 0.1, 1.0)
+                    .unwrap();
             }
             "zero" => snake.set_targets(&vec![0.0; n]).unwrap(),
             mode => {
@@ -157,7 +174,10 @@ pub fn run_ours(s: &Scenario) -> Vec<Vec<f64>> {
                         "torque" => JointControl::Torque(signal(k, j, force)),
                         other => panic!("unknown mode {other}"),
                     };
-                    snake.world_mut().set_joint_control(body, j, control).unwrap();
+                    snake
+                        .world_mut()
+                        .set_joint_control(body, j, control)
+                        .unwrap();
                 }
             }
         }
@@ -180,7 +200,10 @@ pub fn run_ours(s: &Scenario) -> Vec<Vec<f64>> {
 
 /// Root of the repository (where `.venv/` lives).
 pub fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ has a parent").to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("tests/ has a parent")
+        .to_path_buf()
 }
 
 /// The Python that has pybullet 3.2.7: `$SNAKESIM_PYTHON`, else `.venv/bin/python` at the root.
@@ -209,9 +232,18 @@ pub struct Table {
 pub fn read_csv(path: &Path) -> Table {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut lines = text.lines();
-    let header = lines.next().expect("header").split(',').map(str::to_owned).collect();
+    let header = lines
+        .next()
+        .expect("header")
+        .split(',')
+        .map(str::to_owned)
+        .collect();
     let rows = lines
-        .map(|l| l.split(',').map(|c| c.parse::<f64>().unwrap_or_else(|e| panic!("{c}: {e}"))).collect())
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse::<f64>().unwrap_or_else(|e| panic!("{c}: {e}")))
+                .collect()
+        })
         .collect();
     Table { header, rows }
 }
@@ -234,7 +266,10 @@ pub fn run_reference(scenarios: &[Scenario], tag: &str) -> Vec<Table> {
         "pybullet reference failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let tables = scenarios.iter().map(|s| read_csv(&dir.join(format!("{}.csv", s.name)))).collect();
+    let tables = scenarios
+        .iter()
+        .map(|s| read_csv(&dir.join(format!("{}.csv", s.name))))
+        .collect();
     std::fs::remove_dir_all(&dir).ok();
     tables
 }

@@ -1,1 +1,42 @@
-fn main() {}
+//! `snake-cli`: run the snake's gait, run the environment, benchmark.
+
+mod bench;
+mod plot;
+mod run;
+mod trajectory;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// snakesim: the "Simulating Snakes" robot on Bullet, bit for bit as pybullet 3.2.7 moves it.
+#[derive(Parser)]
+#[command(name = "snake-cli", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a gait and report the snake's motion; optionally write the trajectory (CSV) and a plot (PNG).
+    Run(run::RunArgs),
+    /// Measure physics steps per second (and pybullet's, when its reference environment exists).
+    Bench(bench::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run(args) => run::run(&args),
+        Command::Bench(args) => bench::bench(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            // One line: the error and its causes, for people and for scripts.
+            eprintln!("error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

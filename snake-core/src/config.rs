@@ -95,7 +95,11 @@ impl std::str::FromStr for Preset {
         Preset::ALL
             .into_iter()
             .find(|p| p.name() == s)
-            .ok_or_else(|| invalid(format!("unknown preset '{s}' (expected one of: paper, snakebot-gym)")))
+            .ok_or_else(|| {
+                invalid(format!(
+                    "unknown preset '{s}' (expected one of: paper, snakebot-gym)"
+                ))
+            })
     }
 }
 
@@ -115,10 +119,16 @@ impl SnakeConfig {
     /// Checks every parameter; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
         if self.joints < 1 {
-            return Err(invalid(format!("joints must be at least 1, got {}", self.joints)));
+            return Err(invalid(format!(
+                "joints must be at least 1, got {}",
+                self.joints
+            )));
         }
         if self.joints > 512 {
-            return Err(invalid(format!("joints must be at most 512, got {}", self.joints)));
+            return Err(invalid(format!(
+                "joints must be at most 512, got {}",
+                self.joints
+            )));
         }
         let positive = [
             ("half_extent", self.half_extent),
@@ -128,7 +138,9 @@ impl SnakeConfig {
         ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
-                return Err(invalid(format!("{name} must be positive and finite, got {value}")));
+                return Err(invalid(format!(
+                    "{name} must be positive and finite, got {value}"
+                )));
             }
         }
         let non_negative = [
@@ -140,13 +152,22 @@ impl SnakeConfig {
         ];
         for (name, value) in non_negative {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(invalid(format!("{name} must be finite and >= 0, got {value}")));
+                return Err(invalid(format!(
+                    "{name} must be finite and >= 0, got {value}"
+                )));
             }
         }
         if !self.gravity.is_finite() {
-            return Err(invalid(format!("gravity must be finite, got {}", self.gravity)));
+            return Err(invalid(format!(
+                "gravity must be finite, got {}",
+                self.gravity
+            )));
         }
-        if !self.anisotropic_friction.iter().all(|a| a.is_finite() && *a >= 0.0) {
+        if !self
+            .anisotropic_friction
+            .iter()
+            .all(|a| a.is_finite() && *a >= 0.0)
+        {
             return Err(invalid("anisotropic_friction must be finite and >= 0"));
         }
         Ok(())

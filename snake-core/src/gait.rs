@@ -74,7 +74,9 @@ impl LateralUndulation {
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
-                return Err(invalid(format!("gait {name} must be positive and finite, got {v}")));
+                return Err(invalid(format!(
+                    "gait {name} must be positive and finite, got {v}"
+                )));
             }
         }
         for (name, v) in [
@@ -88,7 +90,10 @@ impl LateralUndulation {
             }
         }
         if self.steering <= -1.0 {
-            return Err(invalid(format!("gait steering must be > -1, got {}", self.steering)));
+            return Err(invalid(format!(
+                "gait steering must be > -1, got {}",
+                self.steering
+            )));
         }
         Ok(())
     }
@@ -116,7 +121,8 @@ impl Gait for LateralUndulation {
             self.scale = self.front / ramp_end;
         }
         for (segment, target) in targets.iter_mut().enumerate() {
-            let mut phase = (self.front - (segment + 1) as f64 * self.segment_length) / self.wave_length;
+            let mut phase =
+                (self.front - (segment + 1) as f64 * self.segment_length) / self.wave_length;
             phase -= phase.floor();
             phase *= std::f64::consts::PI * 2.0;
             let mut t = phase.sin() * self.scale * self.amplitude;
@@ -142,6 +148,14 @@ impl Gait for LateralUndulation {
 pub enum GaitKind {
     /// [`LateralUndulation`] (`sine`).
     Sine,
+}
+
+impl std::fmt::Display for GaitKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            GaitKind::Sine => "sine",
+        })
+    }
 }
 
 impl std::str::FromStr for GaitKind {

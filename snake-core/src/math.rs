@@ -44,10 +44,15 @@ impl StartPose {
 
     /// Checks that every value is finite.
     pub fn validate(&self) -> crate::Result<()> {
-        if [self.x, self.y, self.z, self.yaw].iter().all(|v| v.is_finite()) {
+        if [self.x, self.y, self.z, self.yaw]
+            .iter()
+            .all(|v| v.is_finite())
+        {
             Ok(())
         } else {
-            Err(crate::error::invalid(format!("start pose must be finite, got {self:?}")))
+            Err(crate::error::invalid(format!(
+                "start pose must be finite, got {self:?}"
+            )))
         }
     }
 }

@@ -112,8 +112,13 @@ impl Snake {
             )));
         }
         let c = &self.config;
-        self.world
-            .set_position_targets(self.body, targets, c.motor_force, c.position_gain, c.velocity_gain)
+        self.world.set_position_targets(
+            self.body,
+            targets,
+            c.motor_force,
+            c.position_gain,
+            c.velocity_gain,
+        )
     }
 
     /// One physics step. Fails with [`Error::NonFinite`] if the base or a joint left the finite range.
@@ -145,7 +150,8 @@ impl Snake {
     /// Joint angles and velocities written into slices of length [`Snake::joints`]; either may be
     /// empty to skip it. Allocation-free, for hot loops.
     pub fn read_joints(&self, positions: &mut [f64], velocities: &mut [f64]) -> Result<()> {
-        self.world.read_joints(self.body, positions, velocities, &mut [])
+        self.world
+            .read_joints(self.body, positions, velocities, &mut [])
     }
 
     /// Pose of every cube: the base first, then each link.

@@ -243,13 +243,17 @@ impl World {
     pub fn set_gravity(&mut self, gravity: Vector3<f64>) -> Result<()> {
         finite(gravity.as_slice(), "gravity")?;
         // SAFETY: self.ptr() is a live world owned by self.
-        check(unsafe { bullet_sys::ss_world_set_gravity(self.ptr(), gravity.x, gravity.y, gravity.z) })
+        check(unsafe {
+            bullet_sys::ss_world_set_gravity(self.ptr(), gravity.x, gravity.y, gravity.z)
+        })
     }
 
     /// `setTimeStep`: seconds per [`World::step`].
     pub fn set_time_step(&mut self, dt: f64) -> Result<()> {
         if !(dt.is_finite() && dt > 0.0) {
-            return Err(invalid(format!("time step must be positive and finite, got {dt}")));
+            return Err(invalid(format!(
+                "time step must be positive and finite, got {dt}"
+            )));
         }
         // SAFETY: live world owned by self.
         check(unsafe { bullet_sys::ss_world_set_time_step(self.ptr(), dt) })?;
@@ -283,7 +287,11 @@ impl World {
             let parent = match link.parent {
                 None => 0,
                 Some(p) if p < i => p as i32 + 1,
-                Some(p) => return Err(invalid(format!("link {i} has parent {p}, which is not an earlier link"))),
+                Some(p) => {
+                    return Err(invalid(format!(
+                        "link {i} has parent {p}, which is not an earlier link"
+                    )))
+                }
             };
             masses.push(link.mass);
             positions.extend_from_slice(&link.position);
@@ -324,7 +332,12 @@ impl World {
     }
 
     /// `changeDynamics(body, link, ...)`; `link` `None` is the base.
-    pub fn change_dynamics(&mut self, body: BodyId, link: Option<usize>, dynamics: &Dynamics) -> Result<()> {
+    pub fn change_dynamics(
+        &mut self,
+        body: BodyId,
+        link: Option<usize>,
+        dynamics: &Dynamics,
+    ) -> Result<()> {
         let unset = -1.0;
         let nonneg = |v: Option<f64>, what: &str| -> Result<f64> {
             match v {
@@ -361,7 +374,12 @@ impl World {
     }
 
     /// `setJointMotorControl2` on one joint.
-    pub fn set_joint_control(&mut self, body: BodyId, joint: usize, control: JointControl) -> Result<()> {
+    pub fn set_joint_control(
+        &mut self,
+        body: BodyId,
+        joint: usize,
+        control: JointControl,
+    ) -> Result<()> {
         if joint >= self.joint_count(body)? {
             return Err(invalid(format!("body {} has no joint {joint}", body.0)));
         }
@@ -386,19 +404,45 @@ impl World {
                 target_velocity,
                 max_force,
                 kd,
-            } => (bullet_sys::SS_VELOCITY_CONTROL, 0.0, target_velocity, max_force, 0.0, kd, -1.0),
+            } => (
+                bullet_sys::SS_VELOCITY_CONTROL,
+                0.0,
+                target_velocity,
+                max_force,
+                0.0,
+                kd,
+                -1.0,
+            ),
             JointControl::Torque(t) => (bullet_sys::SS_TORQUE_CONTROL, 0.0, 0.0, t, 0.0, 0.0, -1.0),
         };
         finite(&[pos, vel, force, kp, kd, max_vel], "joint control values")?;
         // SAFETY: live world; joint index checked above.
         check(unsafe {
-            bullet_sys::ss_set_joint_motor(self.ptr(), body.0, joint as i32, mode as i32, pos, vel, force, kp, kd, max_vel)
+            bullet_sys::ss_set_joint_motor(
+                self.ptr(),
+                body.0,
+                joint as i32,
+                mode as i32,
+                pos,
+                vel,
+                force,
+                kp,
+                kd,
+                max_vel,
+            )
         })
     }
 
     /// Position control with target velocity 0 on joints `0..targets.len()`, in one call: the same
     /// effect as [`World::set_joint_control`] with [`JointControl::Position`] on each joint.
-    pub fn set_position_targets(&mut self, body: BodyId, targets: &[f64], max_force: f64, kp: f64, kd: f64) -> Result<()> {
+    pub fn set_position_targets(
+        &mut self,
+        body: BodyId,
+        targets: &[f64],
+        max_force: f64,
+        kp: f64,
+        kd: f64,
+    ) -> Result<()> {
         let n = self.joint_count(body)?;
         if targets.len() > n {
             return Err(invalid(format!("{} targets for {n} joints", targets.len())));
@@ -407,7 +451,15 @@ impl World {
         finite(&[max_force, kp, kd], "motor force and gains")?;
         // SAFETY: live world; targets holds targets.len() values.
         check(unsafe {
-            bullet_sys::ss_set_position_targets(self.ptr(), body.0, targets.len() as i32, targets.as_ptr(), max_force, kp, kd)
+            bullet_sys::ss_set_position_targets(
+                self.ptr(),
+                body.0,
+                targets.len() as i32,
+                targets.as_ptr(),
+                max_force,
+                kp,
+                kd,
+            )
         })
     }
 
@@ -437,7 +489,13 @@ impl World {
 
     /// Angles, velocities and motor torques of every joint, written into the given slices, which must
     /// each be as long as the body has joints (pass an empty slice to skip one).
-    pub fn read_joints(&self, body: BodyId, positions: &mut [f64], velocities: &mut [f64], torques: &mut [f64]) -> Result<()> {
+    pub fn read_joints(
+        &self,
+        body: BodyId,
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()> {
         let n = self.joint_count(body)?;
         let out = |s: &mut [f64], what: &str| -> Result<*mut f64> {
             match s.len() {
@@ -446,7 +504,11 @@ impl World {
                 len => Err(invalid(format!("{what}: slice of {len} for {n} joints"))),
             }
         };
-        let (p, v, t) = (out(positions, "positions")?, out(velocities, "velocities")?, out(torques, "torques")?);
+        let (p, v, t) = (
+            out(positions, "positions")?,
+            out(velocities, "velocities")?,
+            out(torques, "torques")?,
+        );
         // SAFETY: live world; every non-null pointer addresses n writable f64.
         check(unsafe { bullet_sys::ss_get_joint_states(self.ptr(), body.0, n as i32, p, v, t) })
     }
@@ -470,7 +532,9 @@ impl World {
         let n = self.joint_count(body)?;
         let mut raw = vec![0.0; 7 * n];
         // SAFETY: live world; raw holds 7 * n writable f64.
-        check(unsafe { bullet_sys::ss_get_link_poses(self.ptr(), body.0, n as i32, raw.as_mut_ptr()) })?;
+        check(unsafe {
+            bullet_sys::ss_get_link_poses(self.ptr(), body.0, n as i32, raw.as_mut_ptr())
+        })?;
         Ok(raw
             .chunks_exact(7)
             .map(|c| Pose {
@@ -485,10 +549,14 @@ impl World {
         self.joint_count(body)?;
         let mut count = 0;
         // SAFETY: live world; capacity 0 with a null buffer only counts.
-        check(unsafe { bullet_sys::ss_get_contacts(self.ptr(), body.0, std::ptr::null_mut(), 0, &mut count) })?;
+        check(unsafe {
+            bullet_sys::ss_get_contacts(self.ptr(), body.0, std::ptr::null_mut(), 0, &mut count)
+        })?;
         let mut raw = vec![bullet_sys::ss_contact::default(); count.max(0) as usize];
         // SAFETY: raw has room for `count` contacts; nothing stepped in between.
-        check(unsafe { bullet_sys::ss_get_contacts(self.ptr(), body.0, raw.as_mut_ptr(), count, &mut count) })?;
+        check(unsafe {
+            bullet_sys::ss_get_contacts(self.ptr(), body.0, raw.as_mut_ptr(), count, &mut count)
+        })?;
         Ok(raw
             .iter()
             .map(|c| Contact {

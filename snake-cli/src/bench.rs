@@ -1,0 +1,156 @@
+//! `snake-cli bench`: physics steps per second, ours beside pybullet's in the same run.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use snake_core::{Gait, LateralUndulation, Preset, Snake, StartPose};
+
+/// The pybullet side of the benchmark, run by the reference Python.
+const PYBULLET_BENCH: &str = include_str!("../../tests/reference/pybullet_bench.py");
+
+/// Arguments of `snake-cli bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Joint counts to measure, comma separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [5usize, 10, 20])]
+    pub joints: Vec<usize>,
+    /// Physics steps per run.
+    #[arg(long, default_value_t = 2400)]
+    pub steps: u64,
+    /// Runs per joint count; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Python with pybullet 3.2.7 (default: $SNAKESIM_PYTHON, else .venv/bin/python here or in the repository).
+    #[arg(long)]
+    pub python: Option<PathBuf>,
+    /// Measure snakesim only.
+    #[arg(long)]
+    pub no_reference: bool,
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        (values[n / 2 - 1] + values[n / 2]) / 2.0
+    }
+}
+
+/// Steps per second of one run: gait targets, position control and a physics step, as pybullet's loop.
+fn one_run(joints: usize, steps: u64) -> Result<f64> {
+    let config = Preset::Paper.config(joints);
+    let mut snake = Snake::new(&config, StartPose::resting(config.half_extent))?;
+    let mut gait = LateralUndulation::default();
+    let mut targets = vec![0.0; joints];
+    let clock = Instant::now();
+    for _ in 0..steps {
+        gait.next_targets(&mut targets);
+        snake.set_targets(&targets)?;
+        snake.step()?;
+    }
+    Ok(steps as f64 / clock.elapsed().as_secs_f64())
+}
+
+fn find_python(explicit: Option<&Path>) -> Option<PathBuf> {
+    if let Some(p) = explicit {
+        return Some(p.to_path_buf());
+    }
+    if let Some(p) = std::env::var_os("SNAKESIM_PYTHON") {
+        return Some(PathBuf::from(p));
+    }
+    let here = PathBuf::from(".venv/bin/python");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv/bin/python");
+    [here, repo].into_iter().find(|p| p.exists())
+}
+
+fn pybullet_rates(python: &Path, args: &BenchArgs) -> Result<serde_json::Value> {
+    let joints: Vec<String> = args.joints.iter().map(|j| j.to_string()).collect();
+    let out = Command::new(python)
+        .arg("-c")
+        .arg(PYBULLET_BENCH)
+        .arg(joints.join(","))
+        .arg(args.steps.to_string())
+        .arg(args.repeats.to_string())
+        .output()
+        .with_context(|| format!("cannot run {}", python.display()))?;
+    if !out.status.success() {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        bail!(
+            "the pybullet benchmark failed: {}",
+            stderr.lines().last().unwrap_or("no output")
+        );
+    }
+    // pybullet prints its own banner lines; the JSON is the last line.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or("");
+    serde_json::from_str(line).context("the pybullet benchmark printed no JSON")
+}
+
+/// Runs the benchmark and prints a table.
+pub fn bench(args: &BenchArgs) -> Result<()> {
+    if args.joints.is_empty() || args.joints.contains(&0) {
+        bail!("--joints needs one or more counts, each at least 1");
+    }
+    if args.steps == 0 || args.repeats == 0 {
+        bail!("--steps and --repeats must be at least 1");
+    }
+    println!(
+        "physics steps per second, one core, gait running; median of {} runs of {} steps",
+        args.repeats, args.steps
+    );
+    let ours: Vec<f64> = args
+        .joints
+        .iter()
+        .map(|&j| {
+            Ok(median(
+                (0..args.repeats)
+                    .map(|_| one_run(j, args.steps))
+                    .collect::<Result<_>>()?,
+            ))
+        })
+        .collect::<Result<_>>()?;
+
+    let reference = if args.no_reference {
+        None
+    } else {
+        match find_python(args.python.as_deref()) {
+            Some(python) => match pybullet_rates(&python, args) {
+                Ok(v) => Some(v),
+                Err(e) => {
+                    eprintln!("note: pybullet reference not measured: {e:#}");
+                    None
+                }
+            },
+            None => {
+                eprintln!("note: no Python with pybullet found (.venv/bin/python or --python); measuring snakesim only");
+                None
+            }
+        }
+    };
+
+    println!(
+        "{:>6}  {:>16}  {:>16}  {:>7}",
+        "joints", "snakesim", "pybullet 3.2.7", "ratio"
+    );
+    for (&joints, &rate) in args.joints.iter().zip(&ours) {
+        let theirs = reference
+            .as_ref()
+            .and_then(|r| r.get(joints.to_string()))
+            .and_then(|v| serde_json::from_value::<Vec<f64>>(v.clone()).ok())
+            .map(median);
+        match theirs {
+            Some(t) => println!("{joints:>6}  {rate:>16.0}  {t:>16.0}  {:>6.2}x", rate / t),
+            None => println!("{joints:>6}  {rate:>16.0}  {:>16}  {:>7}", "-", "-"),
+        }
+    }
+    Ok(())
+}

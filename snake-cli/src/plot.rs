@@ -1,0 +1,180 @@
+//! Top-down picture of a run: the head's path and the snake's pose at regular moments.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use anyhow::{anyhow, Context, Result};
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use snake_core::{Pose, Snake};
+
+/// Fonts to label the plot with, the first that exists wins (Debian's fonts-dejavu-core first).
+const FONT_CANDIDATES: &[&str] = &[
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+];
+
+/// Registers a system font with plotters once; false when none is installed (the plot then has no text).
+fn font_available() -> bool {
+    static FONT: OnceLock<bool> = OnceLock::new();
+    *FONT.get_or_init(|| {
+        FONT_CANDIDATES.iter().any(|path| {
+            std::fs::read(path)
+                .ok()
+                .map(|bytes| {
+                    let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                    plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok()
+                })
+                .unwrap_or(false)
+        })
+    })
+}
+
+/// Fails early, with the path in the message, if `path` cannot be created.
+pub fn check_writable(path: &Path) -> Result<()> {
+    std::fs::File::create(path)
+        .with_context(|| format!("cannot write plot to {}", path.display()))?;
+    Ok(())
+}
+
+/// What a run leaves to draw.
+pub struct PathPlot {
+    trace: Vec<(f64, f64)>,
+    snapshots: Vec<(f64, Vec<Pose>)>,
+    half_extent: f64,
+}
+
+impl PathPlot {
+    /// An empty plot.
+    pub fn new() -> Self {
+        PathPlot {
+            trace: Vec::new(),
+            snapshots: Vec::with_capacity(10),
+            half_extent: 0.25,
+        }
+    }
+
+    /// Adds the head's current position to the path.
+    pub fn trace(&mut self, snake: &Snake) -> Result<()> {
+        let p = snake.base_state()?.pose.position;
+        self.trace.push((p.x, p.y));
+        Ok(())
+    }
+
+    /// Records the pose of every cube now.
+    pub fn sample(&mut self, snake: &Snake) -> Result<()> {
+        self.half_extent = snake.config().half_extent;
+        self.trace(snake)?;
+        self.snapshots.push((snake.time(), snake.cube_poses()?));
+        Ok(())
+    }
+
+    /// Writes the PNG.
+    pub fn draw(&self, path: &Path, title: &str) -> Result<()> {
+        let h = self.half_extent;
+        let points = self
+            .snapshots
+            .iter()
+            .flat_map(|(_, poses)| poses.iter().map(|p| (p.position.x, p.position.y)))
+            .chain(self.trace.iter().copied());
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for (x, y) in points {
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        }
+        // Equal scales on both axes, so that the snake keeps its shape.
+        let span = (x1 - x0).max(y1 - y0) + 4.0 * h;
+        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let (xr, yr) = (
+            cx - span / 2.0..cx + span / 2.0,
+            cy - span / 2.0..cy + span / 2.0,
+        );
+
+        let err = |e: &dyn std::fmt::Display| anyhow!("cannot draw plot {}: {e}", path.display());
+        let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let text = font_available();
+        let mut builder = ChartBuilder::on(&root);
+        builder.margin(20);
+        if text {
+            builder
+                .caption(title, ("sans-serif", 24))
+                .x_label_area_size(40)
+                .y_label_area_size(60);
+        }
+        let mut chart = builder.build_cartesian_2d(xr, yr).map_err(|e| err(&e))?;
+        if text {
+            chart
+                .configure_mesh()
+                .x_desc("x [m]")
+                .y_desc("y [m]")
+                .light_line_style(RGBColor(235, 235, 235))
+                .draw()
+                .map_err(|e| err(&e))?;
+        }
+        chart
+            .draw_series(LineSeries::new(
+                self.trace.iter().copied(),
+                BLUE.mix(0.6).stroke_width(2),
+            ))
+            .map_err(|e| err(&e))?;
+
+        let n = self.snapshots.len().max(2) as f64;
+        for (k, (t, poses)) in self.snapshots.iter().enumerate() {
+            // Early poses pale, late poses dark.
+            let shade = 0.25 + 0.75 * k as f64 / (n - 1.0);
+            for (i, pose) in poses.iter().enumerate() {
+                let colour = if i == 0 {
+                    RED.mix(shade)
+                } else {
+                    BLACK.mix(shade * 0.8)
+                };
+                let corners = square(pose, h);
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        corners.clone(),
+                        colour.mix(0.35).filled(),
+                    )))
+                    .map_err(|e| err(&e))?;
+                let mut outline = corners;
+                outline.push(outline[0]);
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        outline,
+                        colour.stroke_width(1),
+                    )))
+                    .map_err(|e| err(&e))?;
+            }
+            if text {
+                let head = &poses[0].position;
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        format!("{t:.1} s"),
+                        (head.x + 1.2 * h, head.y),
+                        ("sans-serif", 14),
+                    )))
+                    .map_err(|e| err(&e))?;
+            }
+        }
+        root.present().map_err(|e| err(&e))?;
+        Ok(())
+    }
+}
+
+/// The four corners of a cube's footprint, seen from above.
+fn square(pose: &Pose, h: f64) -> Vec<(f64, f64)> {
+    let yaw = pose.yaw();
+    let (s, c) = yaw.sin_cos();
+    [(-h, -h), (h, -h), (h, h), (-h, h)]
+        .iter()
+        .map(|&(dx, dy)| {
+            (
+                pose.position.x + c * dx - s * dy,
+                pose.position.y + s * dx + c * dy,
+            )
+        })
+        .collect()
+}

@@ -1,0 +1,171 @@
+//! `snake-cli run`: drive the snake with a gait and report how it moved.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use snake_core::{Gait, GaitKind, LateralUndulation, Preset, Snake, StartPose};
+
+use crate::plot::{self, PathPlot};
+use crate::trajectory::TrajectoryWriter;
+
+/// Arguments of `snake-cli run`.
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Number of joints N (the snake has N + 1 cubes).
+    #[arg(long, default_value_t = 10)]
+    pub joints: usize,
+    /// Gait: sine (pybullet's snake.py lateral undulation).
+    #[arg(long, default_value = "sine")]
+    pub gait: GaitKind,
+    /// Parameter preset: paper (every cube 0.06 kg) or snakebot-gym (links 1.0 kg, the paper's code).
+    #[arg(long, default_value = "paper")]
+    pub preset: Preset,
+    /// Simulated duration in seconds.
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    pub seconds: f64,
+    /// Start pose of the base: X,Y,Z,YAW (metres, radians). Default: 0,0,<half extent>,0.
+    #[arg(long, value_parser = parse_start, allow_hyphen_values = true)]
+    pub start: Option<StartPose>,
+    /// Steering offset in radians (snake.py uses +-0.2; positive turns left).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub steer: f64,
+    /// Write the trajectory here as CSV (one row per 1/240 s step).
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// Draw the path seen from above, with the snake's pose at regular moments, as PNG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+fn parse_start(text: &str) -> Result<StartPose, String> {
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("'{text}' is not X,Y,Z,YAW (four numbers separated by commas)"))?;
+    let [x, y, z, yaw] = values[..] else {
+        return Err(format!(
+            "'{text}' has {} values; expected X,Y,Z,YAW",
+            values.len()
+        ));
+    };
+    let pose = StartPose { x, y, z, yaw };
+    pose.validate().map_err(|e| e.to_string())?;
+    Ok(pose)
+}
+
+/// Runs the gait and prints a summary.
+pub fn run(args: &RunArgs) -> Result<()> {
+    if args.joints < 1 {
+        bail!("--joints must be at least 1, got {}", args.joints);
+    }
+    if !(args.seconds.is_finite() && args.seconds > 0.0) {
+        bail!(
+            "--seconds must be a positive finite number, got {}",
+            args.seconds
+        );
+    }
+    let config = args.preset.config(args.joints);
+    config.validate()?;
+    let mut gait = match args.gait {
+        GaitKind::Sine => LateralUndulation::default().with_steering(args.steer),
+    };
+    gait.dt = config.dt;
+    gait.validate()?;
+    let start = args
+        .start
+        .unwrap_or_else(|| StartPose::resting(config.half_extent));
+    let steps = (args.seconds / config.dt).round() as u64;
+    if steps == 0 {
+        bail!(
+            "--seconds {} is shorter than one physics step ({} s)",
+            args.seconds,
+            config.dt
+        );
+    }
+
+    // Open the outputs first: an unwritable path fails before any simulation time is spent.
+    let mut csv = args
+        .output
+        .as_deref()
+        .map(|p| TrajectoryWriter::create(p, args.joints))
+        .transpose()?;
+    if let Some(path) = &args.plot {
+        plot::check_writable(path)?;
+    }
+
+    let mut snake = Snake::new(&config, start)?;
+    let start_position = snake.base_state()?.pose.position;
+    let mut path = PathPlot::new();
+    path.sample(&snake)?;
+    let snapshot_every = (steps / 4).max(1);
+    let mut targets = vec![0.0; args.joints];
+    let clock = Instant::now();
+    for step in 1..=steps {
+        gait.next_targets(&mut targets);
+        snake.set_targets(&targets)?;
+        snake.step().with_context(|| format!("at step {step}"))?;
+        if let Some(csv) = csv.as_mut() {
+            csv.record(&snake)?;
+        }
+        if step % 24 == 0 || step == steps {
+            path.trace(&snake)?;
+        }
+        if step % snapshot_every == 0 {
+            path.sample(&snake)?;
+        }
+    }
+    let wall = clock.elapsed().as_secs_f64();
+
+    let end = snake.base_state()?.pose;
+    let moved = end.position - start_position;
+    let distance = moved.xy().norm();
+    println!(
+        "snake: {} joints ({} cubes), preset {}, gait {}, steering {}",
+        args.joints,
+        args.joints + 1,
+        args.preset,
+        args.gait,
+        args.steer
+    );
+    println!(
+        "simulated {:.2} s ({steps} steps of 1/{:.0} s) in {wall:.2} s wall: {:.0} steps/s",
+        snake.time(),
+        1.0 / config.dt,
+        steps as f64 / wall
+    );
+    println!(
+        "distance   {distance:.3} m, from ({:.3}, {:.3}) to ({:.3}, {:.3})",
+        start_position.x, start_position.y, end.position.x, end.position.y
+    );
+    println!("mean speed {:.3} m/s", distance / snake.time());
+    println!(
+        "heading    travel direction {:+.1} deg (counter-clockwise from +x); head yaw {:+.1} deg",
+        moved.y.atan2(moved.x).to_degrees(),
+        end.yaw().to_degrees()
+    );
+    println!(
+        "final pose x {:+.4} m, y {:+.4} m, z {:.4} m, yaw {:+.4} rad",
+        end.position.x,
+        end.position.y,
+        end.position.z,
+        end.yaw()
+    );
+    if let (Some(csv), Some(path)) = (csv, &args.output) {
+        csv.finish()?;
+        println!("wrote {} ({steps} rows)", path.display());
+    }
+    if let Some(out) = &args.plot {
+        let title = format!(
+            "{} joints, {} preset: {distance:.2} m in {:.1} s",
+            args.joints,
+            args.preset,
+            snake.time()
+        );
+        path.draw(out, &title)?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}

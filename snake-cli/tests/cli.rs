@@ -1,0 +1,137 @@
+//! End-to-end tests of the `snake-cli` binary.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use snakesim_tests::{assert_identical, read_csv, run_reference, Scenario};
+
+fn snake_cli(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_snake-cli"))
+        .args(args)
+        .output()
+        .expect("snake-cli starts")
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("snake-cli-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// `snake-cli run --output` writes the state after every step, and it is pybullet's, bit for bit.
+#[test]
+fn run_csv_matches_pybullet() {
+    let cases = [
+        ("cli-10-paper", 10, "paper", [0.0, 0.0, 0.25, 0.0], vec![]),
+        (
+            "cli-5-gym-drop",
+            5,
+            "snakebot-gym",
+            [0.3, -0.2, 0.5, 0.7],
+            vec!["--start=0.3,-0.2,0.5,0.7"],
+        ),
+    ];
+    let scenarios: Vec<Scenario> = cases
+        .iter()
+        .map(|(name, joints, preset, start, _)| {
+            Scenario::new(*name, *joints, preset, *start, 2400, "gait")
+        })
+        .collect();
+    let reference = run_reference(&scenarios, "cli");
+    for ((name, joints, preset, _, extra), table) in cases.iter().zip(reference) {
+        let csv = temp(&format!("{name}.csv"));
+        let joints = joints.to_string();
+        let mut args = vec![
+            "run",
+            "--joints",
+            &joints,
+            "--preset",
+            preset,
+            "--seconds",
+            "10",
+        ];
+        args.extend(extra.iter().copied());
+        args.extend(["--output", csv.to_str().unwrap()]);
+        let out = snake_cli(&args);
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let ours = read_csv(&csv);
+        // The CLI's columns are the reference's first columns, in the same order and with the same names.
+        assert_eq!(
+            ours.header[..],
+            table.header[..ours.header.len()],
+            "{name}: CSV header"
+        );
+        let width = ours.header.len();
+        let reference: Vec<Vec<f64>> = table.rows.iter().map(|r| r[..width].to_vec()).collect();
+        assert_identical(name, &ours.header, &reference, &ours.rows);
+        let summary = String::from_utf8_lossy(&out.stdout);
+        assert!(summary.contains("mean speed"), "{summary}");
+    }
+}
+
+#[test]
+fn run_writes_a_png_plot() {
+    let png = temp("path.png");
+    let out = snake_cli(&[
+        "run",
+        "--joints",
+        "3",
+        "--seconds",
+        "2",
+        "--plot",
+        png.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "a PNG signature");
+    // IHDR: width and height are big-endian u32 at bytes 16..24.
+    let width = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+    let height = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+    assert_eq!((width, height), (900, 900));
+}
+
+/// Bad input: one line on stderr naming the problem, a non-zero exit, never a panic.
+#[test]
+fn bad_input_is_one_clear_line() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["run", "--joints", "0"], "--joints"),
+        (&["run", "--seconds", "-1"], "--seconds"),
+        (&["run", "--seconds", "inf"], "--seconds"),
+        (&["run", "--seconds", "nan"], "--seconds"),
+        (&["run", "--start", "1,2,3"], "X,Y,Z,YAW"),
+        (&["run", "--start", "a,b,c,d"], "X,Y,Z,YAW"),
+        (&["run", "--start=0,0,nan,0"], "finite"),
+        (&["run", "--preset", "heavy"], "unknown preset"),
+        (&["run", "--gait", "walk"], "unknown gait"),
+        (
+            &["run", "--output", "/nonexistent-dir/t.csv"],
+            "cannot write trajectory",
+        ),
+        (
+            &["run", "--plot", "/nonexistent-dir/p.png"],
+            "cannot write plot",
+        ),
+        (&["bench", "--joints", "0"], "--joints"),
+        (&["run", "--no-such-option"], "unexpected argument"),
+    ];
+    for (args, needle) in cases {
+        let out = snake_cli(args);
+        assert!(!out.status.success(), "{args:?} should fail");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let first = stderr.lines().next().unwrap_or("");
+        assert!(first.starts_with("error:"), "{args:?}: {stderr}");
+        assert!(
+            first.contains(needle),
+            "{args:?}: '{first}' should mention {needle}"
+        );
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
