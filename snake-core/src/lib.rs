@@ -9,6 +9,9 @@
 //!   0.06 kg) and `snakebot-gym` (the paper's code: links 1.0 kg).
 //! - [`snake`]: [`Snake`], the robot on its ground plane.
 //! - [`gait`]: the [`Gait`] trait and [`LateralUndulation`], pybullet's snake.py wave.
+//! - [`env`](mod@env): [`SnakeEnv`], the paper's reinforcement-learning environment (Gymnasium-style
+//!   `reset`/`step`), configured by [`EnvConfig`].
+//! - [`vec_env`]: [`VecSnakeEnv`], many envs stepped together across threads with automatic resets.
 //!
 //! ```
 //! use snake_core::{Gait, LateralUndulation, Preset, Snake, StartPose};
@@ -29,15 +32,24 @@
 #![deny(missing_docs)]
 
 pub mod config;
+pub mod env;
 pub mod error;
 pub mod gait;
 pub mod math;
 pub mod snake;
+pub mod vec_env;
 pub mod world;
 
 pub use config::{Preset, SnakeConfig};
+pub use env::{
+    DistancePrecision, EnvConfig, Info, ObservationLayout, ResetOptions, RewardConfig, RewardTerms,
+    SnakeEnv, StartDistribution, StepOutcome, StepResult,
+};
 pub use error::{Error, Result};
 pub use gait::{Gait, GaitKind, LateralUndulation};
 pub use math::{quaternion_from_euler, StartPose};
 pub use snake::Snake;
-pub use world::{BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose, World};
+pub use vec_env::{FinalStep, FinalSteps, VecSnakeEnv};
+pub use world::{
+    BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose, World,
+};

@@ -1,0 +1,502 @@
+//! The paper's reinforcement-learning environment: [`SnakeEnv`], a Gymnasium-style `reset`/`step`
+//! interface over [`Snake`], bit-exact with the paper's pybullet env.
+
+mod config;
+mod observation;
+mod reward;
+#[cfg(test)]
+mod tests;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha12Rng;
+use serde::{Deserialize, Serialize};
+
+pub use config::{EnvConfig, ObservationLayout, StartDistribution};
+pub use reward::{paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardTerms};
+
+use crate::error::{invalid, Result};
+use crate::math::StartPose;
+use crate::Snake;
+use observation::JointScratch;
+
+/// Per-episode choices for [`SnakeEnv::reset`].
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ResetOptions {
+    /// Place the base exactly here instead of drawing the start (no random numbers are drawn then).
+    pub start: Option<StartPose>,
+    /// The goal of this episode instead of [`EnvConfig::goal`].
+    pub goal: Option<(f64, f64)>,
+}
+
+/// What a reset or a step reports besides the observation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Info {
+    /// Distance from the base to the goal, metres, computed as the paper's reward computes it (from
+    /// the `float32` observation; see [`paper_distance`]).
+    pub distance: f64,
+    /// Every term of this step's reward (all 0 after a reset).
+    pub reward_terms: RewardTerms,
+    /// The base is within [`EnvConfig::goal_radius`] of the goal (only ever true on a step, which
+    /// then terminates the episode).
+    pub success: bool,
+    /// Env steps taken in this episode (0 after a reset).
+    pub episode_step: u64,
+    /// Sum of this episode's rewards so far.
+    pub episode_return: f64,
+    /// Simulated seconds since the episode's world was built (the reset's own physics step included).
+    pub time: f64,
+    /// This episode's goal.
+    pub goal: (f64, f64),
+    /// This episode's start pose.
+    pub start: StartPose,
+}
+
+/// The result of [`SnakeEnv::step`]: Gymnasium's `(obs, reward, terminated, truncated, info)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepResult {
+    /// The observation after the step.
+    pub obs: Vec<f32>,
+    /// The step's reward.
+    pub reward: f64,
+    /// The episode ended in a terminal state (the goal was reached).
+    pub terminated: bool,
+    /// The episode was cut off by the step limit.
+    pub truncated: bool,
+    /// Details, including every reward term.
+    pub info: Info,
+}
+
+/// The result of [`SnakeEnv::step_into`]: a [`StepResult`] whose observation went to the caller's slice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepOutcome {
+    /// The step's reward.
+    pub reward: f64,
+    /// The episode ended in a terminal state (the goal was reached).
+    pub terminated: bool,
+    /// The episode was cut off by the step limit.
+    pub truncated: bool,
+    /// Details, including every reward term.
+    pub info: Info,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// No episode yet, or the last step failed.
+    NeedsReset,
+    Running,
+    /// The last step terminated or truncated the episode.
+    Done,
+}
+
+/// The snake robot crawling to a goal: the environment of "Simulating Snakes" (snakebot-gym's
+/// `Snake-v0`), reproduced bit for bit from its pybullet 3.2.7 implementation.
+///
+/// ## Description
+///
+/// A snake of `N` position-controlled revolute joints (`N + 1` cubes of 0.5 m, see
+/// [`SnakeConfig`](crate::SnakeConfig)) lies on a plane with anisotropic friction. The policy sets the
+/// joint target angles; the snake should crawl to a goal, by default 10 m away in -y, which is where
+/// its head points at the start. Each env step is [`EnvConfig::physics_steps_per_env_step`] physics
+/// steps of 1/240 s (1: an episode of 5000 steps is 20.8 simulated seconds).
+///
+/// ## Action Space
+///
+/// `Box(-1, 1, (N,), float32)`, one value per joint from the head (joint 0, next to the base) to the
+/// tail. Actions are clipped to [-1, 1] and multiplied by [`EnvConfig::action_scale`] (1.0): the
+/// result is the target angle in radians of pybullet's `POSITION_CONTROL` with the configured motor
+/// force (10 N m) and pybullet's default gains (kp 0.1, kd 1.0). `f32` and `f64` actions are accepted;
+/// the wrong length or a non-finite value is an [`Error::InvalidArgument`](crate::Error::InvalidArgument).
+///
+/// ## Observation Space
+///
+/// `Box(-inf, inf, (D,), float32)`. Every value is the simulator's double cast to `float32`.
+/// [`ObservationLayout::Paper`] (the default), `D = 2 + 2N`:
+///
+/// | index      | observation                                      | unit    |
+/// |------------|--------------------------------------------------|---------|
+/// | 0          | x of the base (head cube) centre                 | m       |
+/// | 1          | y of the base centre                             | m       |
+/// | 2 + 2j     | angle of joint j (j = 0..N-1, head to tail)      | rad     |
+/// | 3 + 2j     | angular velocity of joint j                      | rad/s   |
+///
+/// (The paper's README says all angles first, then all velocities; its code interleaves them, as here.)
+/// [`ObservationLayout::Extended`] appends 6 values, `D = 2 + 2N + 6`, in the head frame (the base's
+/// frame rotated by its heading only; its y axis runs from head to tail, so "forward" is -y):
+///
+/// | index      | observation                                      | unit    |
+/// |------------|--------------------------------------------------|---------|
+/// | 2N + 2     | goal minus base position, head-frame x           | m       |
+/// | 2N + 3     | goal minus base position, head-frame y           | m       |
+/// | 2N + 4     | sin of the heading (rotation of the base about z) | -       |
+/// | 2N + 5     | cos of the heading                               | -       |
+/// | 2N + 6     | base linear velocity, head-frame x               | m/s     |
+/// | 2N + 7     | base linear velocity, head-frame y               | m/s     |
+///
+/// ## Rewards
+///
+/// The paper's reward is `-distance`, where `distance` is computed from the observation exactly as
+/// `math.hypot(goal_x - obs[0], goal_y - obs[1])` with numpy `float32` arithmetic (see
+/// [`DistancePrecision`] and [`python_hypot`]). On the step that ends with `distance <
+/// goal_radius` the reward is [`RewardConfig::success_reward`] (100) instead. A run that never
+/// arrives scores about -50,000. Optional shaping terms, off by default (weight 0), are added to it:
+/// progress towards the goal, a smoothness penalty on the change of the joint targets and an energy
+/// penalty on the motors' mechanical work; [`RewardTerms`] defines each. `info.reward_terms` reports
+/// every term of every step.
+///
+/// ## Starting State
+///
+/// Every reset builds a fresh world (plane, gravity -9.81 m/s², the snake straight along +y from its
+/// base) with the base at `(x, y, z)` and heading `yaw` (`getQuaternionFromEuler((0, 0, yaw))`),
+/// where x, y ~ U(-0.5, 0.5), z = 0.5 and yaw ~ U(-0.2, 0.2) ([`StartDistribution`]; the snake drops
+/// 0.25 m onto the plane), then takes one physics step before the first observation. The start is
+/// drawn from a ChaCha12 generator: `reset(Some(seed))` reseeds it, `reset(None)` continues its
+/// stream (the first reset without any seed seeds it from the OS, as Gymnasium does).
+/// [`ResetOptions`] can fix the start pose and the goal of one episode.
+///
+/// ## Episode End
+///
+/// - Termination: the distance to the goal falls below [`EnvConfig::goal_radius`] (1 m).
+/// - Truncation: the episode reaches [`EnvConfig::max_episode_steps`] env steps (5000, the
+///   `TimeLimit` registered with `Snake-v0`). Both flags are true if both happen on the same step.
+///
+/// After either, [`SnakeEnv::step`] fails until the next [`SnakeEnv::reset`]. A simulation that
+/// blows up ([`Error::NonFinite`](crate::Error::NonFinite)) also ends the episode; reset to go on.
+///
+/// ## Arguments
+///
+/// [`EnvConfig`]: the snake ([`SnakeConfig`](crate::SnakeConfig), presets `paper` and `snakebot-gym`;
+/// the paper's published env is [`EnvConfig::snakebot_gym`]), `goal`, `goal_radius`,
+/// `max_episode_steps`, `physics_steps_per_env_step`, `start`, `action_scale`, `observation` and
+/// `reward` (shaping weights, success reward, distance precision).
+///
+/// ## Differences from the paper's env
+///
+/// The paper's env also loads a static duck mesh one metre beyond the goal as a marker; it only
+/// matters if the snake touches it and is left out. Its action space is not clipped by the env itself
+/// (Stable-Baselines3 clips before stepping); here the env clips.
+///
+/// ```
+/// use snake_core::{EnvConfig, ResetOptions, SnakeEnv};
+///
+/// let mut env = SnakeEnv::new(EnvConfig::snakebot_gym(5))?;
+/// let (obs, info) = env.reset(Some(42), ResetOptions::default())?;
+/// assert_eq!(obs.len(), 12);
+/// assert_eq!(info.episode_step, 0);
+/// let step = env.step(&[0.5f32, -0.5, 0.5, -0.5, 0.5])?;
+/// assert_eq!(step.reward, -step.info.distance);
+/// assert!(!step.terminated && !step.truncated);
+/// # Ok::<(), snake_core::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct SnakeEnv {
+    config: EnvConfig,
+    rng: Option<ChaCha12Rng>,
+    snake: Option<Snake>,
+    phase: Phase,
+    goal: (f64, f64),
+    start: StartPose,
+    episode_step: u64,
+    episode_return: f64,
+    distance: f64,
+    targets: Vec<f64>,
+    previous_targets: Vec<f64>,
+    joints: JointScratch,
+    torques: Vec<f64>,
+}
+
+impl SnakeEnv {
+    /// An environment with the given configuration; call [`SnakeEnv::reset`] before stepping.
+    pub fn new(config: EnvConfig) -> Result<Self> {
+        config.validate()?;
+        let n = config.joints();
+        Ok(SnakeEnv {
+            goal: config.goal,
+            start: StartPose {
+                x: 0.0,
+                y: 0.0,
+                z: config.start.z,
+                yaw: 0.0,
+            },
+            config,
+            rng: None,
+            snake: None,
+            phase: Phase::NeedsReset,
+            episode_step: 0,
+            episode_return: 0.0,
+            distance: 0.0,
+            targets: vec![0.0; n],
+            previous_targets: vec![0.0; n],
+            joints: JointScratch::new(n),
+            torques: vec![0.0; n],
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &EnvConfig {
+        &self.config
+    }
+
+    /// Number of joints: the length of an action.
+    pub fn action_dim(&self) -> usize {
+        self.config.joints()
+    }
+
+    /// Length of an observation.
+    pub fn observation_dim(&self) -> usize {
+        self.config.observation_dim()
+    }
+
+    /// Bounds of every action value, (-1, 1).
+    pub fn action_bounds(&self) -> (f32, f32) {
+        (-1.0, 1.0)
+    }
+
+    /// The current episode's goal.
+    pub fn goal(&self) -> (f64, f64) {
+        self.goal
+    }
+
+    /// Env steps taken in the current episode.
+    pub fn episode_step(&self) -> u64 {
+        self.episode_step
+    }
+
+    /// Whether [`SnakeEnv::step`] needs a [`SnakeEnv::reset`] first (no episode yet, or it ended).
+    pub fn needs_reset(&self) -> bool {
+        self.phase != Phase::Running
+    }
+
+    /// The current episode's snake and world (for rendering or extra measurements), if any.
+    pub fn snake(&self) -> Option<&Snake> {
+        self.snake.as_ref()
+    }
+
+    /// Starts an episode and returns the first observation. See the type's documentation.
+    pub fn reset(&mut self, seed: Option<u64>, options: ResetOptions) -> Result<(Vec<f32>, Info)> {
+        let mut obs = vec![0.0; self.observation_dim()];
+        let info = self.reset_into(seed, options, &mut obs)?;
+        Ok((obs, info))
+    }
+
+    /// [`SnakeEnv::reset`] writing the observation into `obs` (of length
+    /// [`SnakeEnv::observation_dim`]).
+    pub fn reset_into(
+        &mut self,
+        seed: Option<u64>,
+        options: ResetOptions,
+        obs: &mut [f32],
+    ) -> Result<Info> {
+        self.check_obs_len(obs)?;
+        if let Some(goal) = options.goal {
+            if !(goal.0.is_finite() && goal.1.is_finite()) {
+                return Err(invalid(format!("reset goal must be finite, got {goal:?}")));
+            }
+        }
+        if let Some(start) = options.start {
+            start.validate()?;
+        }
+        if let Some(seed) = seed {
+            self.rng = Some(ChaCha12Rng::seed_from_u64(seed));
+        }
+        let start = match options.start {
+            Some(start) => start,
+            None => {
+                let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
+                let d = &self.config.start;
+                let mut uniform = |[low, high]: [f64; 2]| low + (high - low) * rng.gen::<f64>();
+                let (x, y) = (uniform(d.x), uniform(d.y));
+                let yaw = uniform(d.yaw);
+                StartPose { x, y, z: d.z, yaw }
+            }
+        };
+
+        // Drop the old world first: at most one world per env is alive at a time.
+        self.snake = None;
+        self.phase = Phase::NeedsReset;
+        let mut snake = Snake::new(&self.config.snake, start)?;
+        // The paper steps once before the first observation.
+        snake.step()?;
+        self.goal = options.goal.unwrap_or(self.config.goal);
+        self.start = start;
+        self.episode_step = 0;
+        self.episode_return = 0.0;
+        self.previous_targets.fill(0.0);
+        observation::write(
+            self.config.observation,
+            &snake,
+            self.goal,
+            &mut self.joints,
+            obs,
+        )?;
+        self.distance = paper_distance(
+            self.goal,
+            obs[0],
+            obs[1],
+            self.config.reward.distance_precision,
+        );
+        self.snake = Some(snake);
+        self.phase = Phase::Running;
+        Ok(self.info(RewardTerms::default(), false))
+    }
+
+    /// One env step with `action` (one value per joint, `f32` or `f64`). See the type's documentation.
+    pub fn step<A: Copy + Into<f64>>(&mut self, action: &[A]) -> Result<StepResult> {
+        let mut obs = vec![0.0; self.observation_dim()];
+        let out = self.step_into(action, &mut obs)?;
+        Ok(StepResult {
+            obs,
+            reward: out.reward,
+            terminated: out.terminated,
+            truncated: out.truncated,
+            info: out.info,
+        })
+    }
+
+    /// [`SnakeEnv::step`] writing the observation into `obs` (of length
+    /// [`SnakeEnv::observation_dim`]); allocation-free.
+    pub fn step_into<A: Copy + Into<f64>>(
+        &mut self,
+        action: &[A],
+        obs: &mut [f32],
+    ) -> Result<StepOutcome> {
+        match self.phase {
+            Phase::Running => {}
+            Phase::NeedsReset => {
+                return Err(invalid(
+                    "step() needs reset() first (no episode is running)",
+                ))
+            }
+            Phase::Done => {
+                return Err(invalid(
+                    "step() after the episode ended (terminated or truncated); call reset() first",
+                ))
+            }
+        }
+        self.check_obs_len(obs)?;
+        let n = self.action_dim();
+        if action.len() != n {
+            return Err(invalid(format!(
+                "action must have {n} values (one per joint), got {}",
+                action.len()
+            )));
+        }
+        let scale = self.config.action_scale;
+        for (j, (target, a)) in self.targets.iter_mut().zip(action).enumerate() {
+            let a: f64 = (*a).into();
+            if !a.is_finite() {
+                return Err(invalid(format!("action[{j}] must be finite, got {a}")));
+            }
+            *target = a.clamp(-1.0, 1.0) * scale;
+        }
+
+        let Some(snake) = self.snake.as_mut() else {
+            return Err(invalid(
+                "step() needs reset() first (no episode is running)",
+            ));
+        };
+        let weights = self.config.reward;
+        let dt = snake.config().dt;
+        let mut work = 0.0;
+        let result = (|| -> Result<()> {
+            snake.set_targets(&self.targets)?;
+            for _ in 0..self.config.physics_steps_per_env_step {
+                snake.step()?;
+                if weights.energy_weight != 0.0 {
+                    let body = snake.body();
+                    snake.world().read_joints(
+                        body,
+                        &mut [],
+                        &mut self.joints.velocities,
+                        &mut self.torques,
+                    )?;
+                    let power: f64 = self
+                        .torques
+                        .iter()
+                        .zip(&self.joints.velocities)
+                        .map(|(t, v)| (t * v).abs())
+                        .sum();
+                    work += power * dt;
+                }
+            }
+            observation::write(
+                self.config.observation,
+                snake,
+                self.goal,
+                &mut self.joints,
+                obs,
+            )?;
+            Ok(())
+        })();
+        if let Err(e) = result {
+            self.phase = Phase::NeedsReset;
+            return Err(e);
+        }
+
+        let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
+        let success = distance < self.config.goal_radius;
+        let mut terms = RewardTerms {
+            goal: if success {
+                weights.success_reward
+            } else {
+                -distance
+            },
+            ..RewardTerms::default()
+        };
+        if weights.progress_weight != 0.0 {
+            terms.progress = weights.progress_weight * (self.distance - distance);
+        }
+        if weights.smoothness_weight != 0.0 {
+            let change: f64 = self
+                .targets
+                .iter()
+                .zip(&self.previous_targets)
+                .map(|(t, p)| (t - p) * (t - p))
+                .sum();
+            terms.smoothness = -weights.smoothness_weight * change;
+        }
+        if weights.energy_weight != 0.0 {
+            terms.energy = -weights.energy_weight * work;
+        }
+        self.previous_targets.copy_from_slice(&self.targets);
+        self.distance = distance;
+        let reward = terms.total(&weights);
+        self.episode_step += 1;
+        self.episode_return += reward;
+        let terminated = success;
+        let truncated = self.episode_step >= self.config.max_episode_steps;
+        if terminated || truncated {
+            self.phase = Phase::Done;
+        }
+        Ok(StepOutcome {
+            reward,
+            terminated,
+            truncated,
+            info: self.info(terms, success),
+        })
+    }
+
+    fn check_obs_len(&self, obs: &[f32]) -> Result<()> {
+        let d = self.observation_dim();
+        if obs.len() != d {
+            return Err(invalid(format!(
+                "observation buffer must have {d} values, got {}",
+                obs.len()
+            )));
+        }
+        Ok(())
+    }
+
+    fn info(&self, reward_terms: RewardTerms, success: bool) -> Info {
+        Info {
+            distance: self.distance,
+            reward_terms,
+            success,
+            episode_step: self.episode_step,
+            episode_return: self.episode_return,
+            time: self.snake.as_ref().map_or(0.0, Snake::time),
+            goal: self.goal,
+            start: self.start,
+        }
+    }
+}

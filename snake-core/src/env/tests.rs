@@ -1,0 +1,413 @@
+//! Unit tests of the env: bad input, configuration, seeding, rewards and episode ends.
+
+use super::*;
+use crate::{Error, Preset};
+
+fn env(config: EnvConfig) -> SnakeEnv {
+    SnakeEnv::new(config).expect("valid config")
+}
+
+fn invalid_message(result: Result<impl std::fmt::Debug>) -> String {
+    match result {
+        Err(Error::InvalidArgument(m)) => m,
+        other => panic!("expected InvalidArgument, got {other:?}"),
+    }
+}
+
+#[test]
+fn step_before_reset_is_an_error() {
+    let mut e = env(EnvConfig::default());
+    let m = invalid_message(e.step(&[0.0f32; 5]));
+    assert!(m.contains("reset"), "{m}");
+}
+
+#[test]
+fn bad_actions_are_errors_and_leave_the_episode_running() {
+    let mut e = env(EnvConfig::default());
+    e.reset(Some(1), ResetOptions::default()).unwrap();
+    let m = invalid_message(e.step(&[0.0f32; 4]));
+    assert!(m.contains("5 values") && m.contains("got 4"), "{m}");
+    let m = invalid_message(e.step(&[0.0f32; 6]));
+    assert!(m.contains("got 6"), "{m}");
+    let m = invalid_message(e.step(&[0.0, 0.0, f32::NAN, 0.0, 0.0]));
+    assert!(m.contains("action[2]"), "{m}");
+    let m = invalid_message(e.step(&[0.0, 0.0, 0.0, f64::INFINITY, 0.0]));
+    assert!(m.contains("action[3]"), "{m}");
+    let mut obs = vec![0.0; 3];
+    let m = invalid_message(e.step_into(&[0.0f32; 5], &mut obs));
+    assert!(m.contains("observation buffer"), "{m}");
+    // None of that moved the snake or counted a step.
+    assert_eq!(e.episode_step(), 0);
+    assert!(e.step(&[0.0f32; 5]).is_ok());
+    assert_eq!(e.episode_step(), 1);
+}
+
+#[test]
+fn bad_reset_options_are_errors() {
+    let mut e = env(EnvConfig::default());
+    let goal = ResetOptions {
+        goal: Some((f64::NAN, 0.0)),
+        ..ResetOptions::default()
+    };
+    assert!(invalid_message(e.reset(None, goal)).contains("goal"));
+    let start = ResetOptions {
+        start: Some(StartPose {
+            x: 0.0,
+            y: f64::INFINITY,
+            z: 0.5,
+            yaw: 0.0,
+        }),
+        ..ResetOptions::default()
+    };
+    assert!(invalid_message(e.reset(None, start)).contains("start"));
+    let mut obs = vec![0.0; 11];
+    assert!(invalid_message(e.reset_into(None, ResetOptions::default(), &mut obs)).contains("12"));
+    assert!(e.needs_reset());
+}
+
+#[test]
+fn bad_configs_name_the_field() {
+    let cases: Vec<(EnvConfig, &str)> = vec![
+        (EnvConfig::with_preset(Preset::Paper, 0), "snake.joints"),
+        (
+            EnvConfig {
+                goal: (f64::NAN, 1.0),
+                ..EnvConfig::default()
+            },
+            "goal",
+        ),
+        (
+            EnvConfig {
+                goal_radius: -1.0,
+                ..EnvConfig::default()
+            },
+            "goal_radius",
+        ),
+        (
+            EnvConfig {
+                max_episode_steps: 0,
+                ..EnvConfig::default()
+            },
+            "max_episode_steps",
+        ),
+        (
+            EnvConfig {
+                physics_steps_per_env_step: 0,
+                ..EnvConfig::default()
+            },
+            "physics_steps_per_env_step",
+        ),
+        (
+            EnvConfig {
+                start: StartDistribution {
+                    x: [0.5, -0.5],
+                    ..StartDistribution::default()
+                },
+                ..EnvConfig::default()
+            },
+            "start.x",
+        ),
+        (
+            EnvConfig {
+                start: StartDistribution {
+                    yaw: [0.0, f64::INFINITY],
+                    ..StartDistribution::default()
+                },
+                ..EnvConfig::default()
+            },
+            "start.yaw",
+        ),
+        (
+            EnvConfig {
+                action_scale: 0.0,
+                ..EnvConfig::default()
+            },
+            "action_scale",
+        ),
+        (
+            EnvConfig {
+                reward: RewardConfig {
+                    energy_weight: f64::NAN,
+                    ..RewardConfig::default()
+                },
+                ..EnvConfig::default()
+            },
+            "reward.energy_weight",
+        ),
+    ];
+    for (config, field) in cases {
+        let m = invalid_message(SnakeEnv::new(config));
+        assert!(m.starts_with(field), "error for {field}: {m}");
+        assert!(!m.contains('\n'), "one line: {m}");
+    }
+}
+
+#[test]
+fn config_serde_defaults_and_unknown_fields() {
+    let config: EnvConfig = serde_json::from_str(
+        r#"{"goal": [1.0, -5.0], "observation": "extended", "start": {"z": 0.25}}"#,
+    )
+    .unwrap();
+    assert_eq!(config.goal, (1.0, -5.0));
+    assert_eq!(config.observation, ObservationLayout::Extended);
+    assert_eq!(config.start.z, 0.25);
+    assert_eq!(config.start.x, [-0.5, 0.5]);
+    assert_eq!(config.max_episode_steps, 5000);
+    let round_trip: EnvConfig =
+        serde_json::from_str(&serde_json::to_string(&config).unwrap()).unwrap();
+    assert_eq!(round_trip, config);
+    let err = serde_json::from_str::<EnvConfig>(r#"{"goal_raduis": 2.0}"#).unwrap_err();
+    assert!(err.to_string().contains("goal_raduis"), "{err}");
+    let err = serde_json::from_str::<EnvConfig>(r#"{"reward": {"progress": 1.0}}"#).unwrap_err();
+    assert!(err.to_string().contains("progress"), "{err}");
+    let config: EnvConfig =
+        serde_json::from_str(r#"{"reward": {"distance_precision": "float64"}}"#).unwrap();
+    assert_eq!(config.reward.distance_precision, DistancePrecision::Float64);
+}
+
+#[test]
+fn seeding_reproduces_and_none_continues_the_stream() {
+    let mut a = env(EnvConfig::default());
+    let mut b = env(EnvConfig::default());
+    let (obs_a, info_a) = a.reset(Some(3), ResetOptions::default()).unwrap();
+    let (obs_b, info_b) = b.reset(Some(3), ResetOptions::default()).unwrap();
+    assert_eq!(obs_a, obs_b);
+    assert_eq!(info_a.start, info_b.start);
+    let s = info_a.start;
+    assert!(
+        (-0.5..0.5).contains(&s.x) && (-0.5..0.5).contains(&s.y) && (-0.2..0.2).contains(&s.yaw)
+    );
+    assert_eq!(s.z, 0.5);
+    let (_, next_a) = a.reset(None, ResetOptions::default()).unwrap();
+    let (_, next_b) = b.reset(None, ResetOptions::default()).unwrap();
+    assert_eq!(next_a.start, next_b.start);
+    assert_ne!(next_a.start, info_a.start);
+    let (_, other) = b.reset(Some(4), ResetOptions::default()).unwrap();
+    assert_ne!(other.start, info_a.start);
+}
+
+#[test]
+fn options_fix_start_and_goal_for_one_episode() {
+    let mut e = env(EnvConfig::default());
+    let start = StartPose {
+        x: 1.0,
+        y: 2.0,
+        z: 0.5,
+        yaw: 0.3,
+    };
+    let options = ResetOptions {
+        start: Some(start),
+        goal: Some((3.0, 4.0)),
+    };
+    let (obs, info) = e.reset(Some(0), options).unwrap();
+    assert_eq!(info.start, start);
+    assert_eq!(info.goal, (3.0, 4.0));
+    assert_eq!(e.goal(), (3.0, 4.0));
+    // One physics step of free fall from z = 0.5: x and y have not moved (to float32 precision).
+    assert!(
+        (obs[0] - 1.0).abs() < 1e-6 && (obs[1] - 2.0).abs() < 1e-6,
+        "{obs:?}"
+    );
+    let (_, info) = e.reset(None, ResetOptions::default()).unwrap();
+    assert_eq!(info.goal, (0.0, -10.0));
+}
+
+#[test]
+fn paper_reward_is_minus_the_float32_distance() {
+    let mut e = env(EnvConfig::snakebot_gym(3));
+    let (obs, info) = e.reset(Some(9), ResetOptions::default()).unwrap();
+    assert_eq!(obs.len(), 8);
+    assert_eq!(
+        info.distance,
+        paper_distance((0.0, -10.0), obs[0], obs[1], DistancePrecision::Float32)
+    );
+    for k in 0..50 {
+        let a = (k as f32 * 0.1).sin();
+        let step = e.step(&[a, -a, a]).unwrap();
+        let d = python_hypot((0.0 - step.obs[0]) as f64, (-10.0 - step.obs[1]) as f64);
+        assert_eq!(step.reward.to_bits(), (-d).to_bits());
+        assert_eq!(step.info.distance, d);
+        assert_eq!(step.info.reward_terms.goal, step.reward);
+        assert_eq!(step.info.episode_step, k + 1);
+    }
+}
+
+#[test]
+fn reaching_the_goal_terminates_with_the_success_reward() {
+    let mut e = env(EnvConfig {
+        goal_radius: 2.0,
+        ..EnvConfig::default()
+    });
+    let options = ResetOptions {
+        goal: Some((0.0, -1.0)),
+        ..ResetOptions::default()
+    };
+    let (_, info) = e.reset(Some(0), options).unwrap();
+    assert!(
+        info.distance < 2.0 && !info.success,
+        "a reset never succeeds"
+    );
+    let step = e.step(&[0.0f32; 5]).unwrap();
+    assert!(step.terminated && !step.truncated && step.info.success);
+    assert_eq!(step.reward, 100.0);
+    assert_eq!(step.info.reward_terms.goal, 100.0);
+    let m = invalid_message(e.step(&[0.0f32; 5]));
+    assert!(m.contains("ended"), "{m}");
+    assert!(e.needs_reset());
+    e.reset(None, ResetOptions::default()).unwrap();
+    assert!(e.step(&[0.0f32; 5]).is_ok());
+}
+
+#[test]
+fn truncation_after_max_episode_steps() {
+    let mut e = env(EnvConfig {
+        max_episode_steps: 4,
+        ..EnvConfig::default()
+    });
+    e.reset(Some(0), ResetOptions::default()).unwrap();
+    let mut total = 0.0;
+    for k in 1..=4 {
+        let step = e.step(&[0.2f32; 5]).unwrap();
+        total += step.reward;
+        assert!(!step.terminated);
+        assert_eq!(step.truncated, k == 4);
+        assert_eq!(step.info.episode_return, total);
+    }
+    assert!(e.step(&[0.2f32; 5]).is_err());
+}
+
+#[test]
+fn actions_are_clipped_and_scaled() {
+    let run = |scale: f64, action: f64| {
+        let mut e = env(EnvConfig {
+            action_scale: scale,
+            ..EnvConfig::default()
+        });
+        e.reset(Some(5), ResetOptions::default()).unwrap();
+        (0..30)
+            .map(|_| e.step(&[action; 5]).unwrap().obs)
+            .last()
+            .unwrap()
+    };
+    assert_eq!(run(1.0, 7.0), run(1.0, 1.0));
+    assert_eq!(run(0.5, 1.0), run(1.0, 0.5));
+    assert_ne!(run(1.0, 1.0), run(1.0, 0.5));
+}
+
+#[test]
+fn f32_and_f64_actions_and_step_into_agree() {
+    let mut a = env(EnvConfig::default());
+    let mut b = env(EnvConfig::default());
+    a.reset(Some(11), ResetOptions::default()).unwrap();
+    b.reset(Some(11), ResetOptions::default()).unwrap();
+    let mut obs = vec![0.0; b.observation_dim()];
+    for k in 0..40 {
+        let action: Vec<f32> = (0..5).map(|j| ((k * 5 + j) as f32 * 0.37).sin()).collect();
+        let action64: Vec<f64> = action.iter().map(|&v| v as f64).collect();
+        let sa = a.step(&action).unwrap();
+        let sb = b.step_into(&action64, &mut obs).unwrap();
+        assert_eq!(sa.obs, obs);
+        assert_eq!(sa.reward.to_bits(), sb.reward.to_bits());
+        assert_eq!(sa.info, sb.info);
+    }
+}
+
+#[test]
+fn shaping_terms_add_up_and_are_reported() {
+    let config = EnvConfig {
+        reward: RewardConfig {
+            progress_weight: 2.0,
+            smoothness_weight: 0.5,
+            energy_weight: 0.01,
+            ..RewardConfig::default()
+        },
+        ..EnvConfig::default()
+    };
+    let mut e = env(config);
+    let (_, info) = e.reset(Some(2), ResetOptions::default()).unwrap();
+    let mut previous = info.distance;
+    let mut previous_targets = [0.0f64; 5];
+    for k in 0..60 {
+        let action: Vec<f32> = (0..5)
+            .map(|j| (k as f32 * 0.2 + j as f32).sin() * 1.3)
+            .collect();
+        let step = e.step(&action).unwrap();
+        let t = step.info.reward_terms;
+        assert_eq!(t.goal, -step.info.distance);
+        assert_eq!(t.progress, 2.0 * (previous - step.info.distance));
+        let targets: Vec<f64> = action
+            .iter()
+            .map(|&a| (a as f64).clamp(-1.0, 1.0))
+            .collect();
+        let change: f64 = targets
+            .iter()
+            .zip(&previous_targets)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum();
+        assert_eq!(t.smoothness, -0.5 * change);
+        assert!(t.energy <= 0.0);
+        assert_eq!(step.reward, t.goal + t.progress + t.smoothness + t.energy);
+        previous = step.info.distance;
+        previous_targets.copy_from_slice(&targets);
+    }
+    // The motors do work while the snake wiggles.
+    assert!(
+        e.step(&[1.0f32, -1.0, 1.0, -1.0, 1.0])
+            .unwrap()
+            .info
+            .reward_terms
+            .energy
+            < 0.0
+    );
+}
+
+#[test]
+fn extended_observation() {
+    let mut e = env(EnvConfig {
+        observation: ObservationLayout::Extended,
+        goal: (3.0, -4.0),
+        ..EnvConfig::default()
+    });
+    assert_eq!(e.observation_dim(), 18);
+    let start = StartPose {
+        x: 1.0,
+        y: 1.0,
+        z: 0.25,
+        yaw: 0.0,
+    };
+    let options = ResetOptions {
+        start: Some(start),
+        ..ResetOptions::default()
+    };
+    let (obs, _) = e.reset(None, options).unwrap();
+    // Heading 0: the head frame is the world frame.
+    let close = |a: f32, b: f32| (a - b).abs() < 1e-4;
+    assert!(close(obs[12], 2.0) && close(obs[13], -5.0), "{obs:?}");
+    assert!(close(obs[14], 0.0) && close(obs[15], 1.0), "{obs:?}");
+    // A quarter turn: the goal vector turns by -90 degrees.
+    let options = ResetOptions {
+        start: Some(StartPose {
+            yaw: std::f64::consts::FRAC_PI_2,
+            ..start
+        }),
+        ..ResetOptions::default()
+    };
+    let (obs, _) = e.reset(None, options).unwrap();
+    assert!(close(obs[12], -5.0) && close(obs[13], -2.0), "{obs:?}");
+    assert!(close(obs[14], 1.0) && close(obs[15], 0.0), "{obs:?}");
+    let step = e.step(&[0.0f32; 5]).unwrap();
+    assert_eq!(step.obs.len(), 18);
+    assert!(step.obs.iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn several_physics_steps_per_env_step() {
+    let mut e = env(EnvConfig {
+        physics_steps_per_env_step: 4,
+        ..EnvConfig::default()
+    });
+    let (_, info) = e.reset(Some(0), ResetOptions::default()).unwrap();
+    assert_eq!(info.time, 1.0 / 240.0);
+    let step = e.step(&[0.1f32; 5]).unwrap();
+    assert_eq!(step.info.time, 5.0 / 240.0);
+}
