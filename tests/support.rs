@@ -248,6 +248,28 @@ pub fn read_csv(path: &Path) -> Table {
     Table { header, rows }
 }
 
+/// Runs `tests/reference/<script>` with the JSON of `spec` and a fresh output directory as its two
+/// arguments; returns that directory (the caller reads and removes it). Panics with the script's
+/// stderr if it fails.
+pub fn run_reference_script(script: &str, spec: &impl Serialize, tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("snakesim-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec_path = dir.join("spec.json");
+    std::fs::write(&spec_path, serde_json::to_string(spec).unwrap()).unwrap();
+    let out = Command::new(reference_python())
+        .arg(repo_root().join("tests/reference").join(script))
+        .arg(&spec_path)
+        .arg(&dir)
+        .output()
+        .expect("the reference Python starts");
+    assert!(
+        out.status.success(),
+        "{script} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir
+}
+
 /// Runs the scenarios through the pybullet reference; returns one table per scenario, in order.
 pub fn run_reference(scenarios: &[Scenario], tag: &str) -> Vec<Table> {
     let dir = std::env::temp_dir().join(format!("snakesim-parity-{tag}-{}", std::process::id()));
