@@ -22,12 +22,21 @@ def build(client, joints):
     client.setGravity(0, 0, -9.81)
     box = client.createCollisionShape(p.GEOM_BOX, halfExtents=[HALF] * 3)
     uid = client.createMultiBody(
-        0.06, box, -1, [0, 0, HALF], [0, 0, 0, 1],
-        linkMasses=[0.06] * joints, linkCollisionShapeIndices=[box] * joints,
-        linkVisualShapeIndices=[-1] * joints, linkPositions=[[0, HALF * 2.0 + 0.01, 0]] * joints,
-        linkOrientations=[[0, 0, 0, 1]] * joints, linkInertialFramePositions=[[0, 0, 0]] * joints,
-        linkInertialFrameOrientations=[[0, 0, 0, 1]] * joints, linkParentIndices=list(range(joints)),
-        linkJointTypes=[p.JOINT_REVOLUTE] * joints, linkJointAxis=[[0, 0, 1]] * joints,
+        0.06,
+        box,
+        -1,
+        [0, 0, HALF],
+        [0, 0, 0, 1],
+        linkMasses=[0.06] * joints,
+        linkCollisionShapeIndices=[box] * joints,
+        linkVisualShapeIndices=[-1] * joints,
+        linkPositions=[[0, HALF * 2.0 + 0.01, 0]] * joints,
+        linkOrientations=[[0, 0, 0, 1]] * joints,
+        linkInertialFramePositions=[[0, 0, 0]] * joints,
+        linkInertialFrameOrientations=[[0, 0, 0, 1]] * joints,
+        linkParentIndices=list(range(joints)),
+        linkJointTypes=[p.JOINT_REVOLUTE] * joints,
+        linkJointAxis=[[0, 0, 1]] * joints,
     )
     for link in range(-1, joints):
         client.changeDynamics(uid, link, lateralFriction=5, anisotropicFriction=[1, 0.01, 0.01])
@@ -48,7 +57,9 @@ def one_run(joints, steps):
             phase = (front - (j + 1) * 0.5) / 4.0
             phase -= math.floor(phase)
             targets.append(math.sin(phase * math.pi * 2.0) * scale * 0.4)
-        client.setJointMotorControlArray(uid, indices, p.POSITION_CONTROL, targetPositions=targets, forces=forces)
+        client.setJointMotorControlArray(
+            uid, indices, p.POSITION_CONTROL, targetPositions=targets, forces=forces
+        )
         front += DT / 1.5 * 4.0
         client.stepSimulation()
     elapsed = time.perf_counter() - start

@@ -125,10 +125,14 @@ def run(scenario, out_path):
                 k = step - 1  # the control of a step uses the state before it
                 if mode == "gait":
                     for j, target in enumerate(wave.targets(joints)):
-                        client.setJointMotorControl2(uid, j, p.POSITION_CONTROL, targetPosition=target, force=force)
+                        client.setJointMotorControl2(
+                            uid, j, p.POSITION_CONTROL, targetPosition=target, force=force
+                        )
                 elif mode == "zero":
                     for j in range(joints):
-                        client.setJointMotorControl2(uid, j, p.POSITION_CONTROL, targetPosition=0.0, force=force)
+                        client.setJointMotorControl2(
+                            uid, j, p.POSITION_CONTROL, targetPosition=0.0, force=force
+                        )
                 elif mode == "position":
                     for j in range(joints):
                         client.setJointMotorControl2(

@@ -1,0 +1,60 @@
+"""Gymnasium's vector API over the batched Rust env: M worlds stepped by one call across threads."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from snakesim import _core
+from snakesim.config import env_config
+
+
+class SnakeVectorEnv(VectorEnv):
+    """``num_envs`` independent :class:`snakesim.SnakeEnv` worlds as one ``gymnasium.vector.VectorEnv``.
+
+    Worlds step in parallel on Rust threads (no subprocesses, no pickling). Finished episodes reset in
+    the same step (``autoreset_mode`` SAME_STEP): the returned observation is the new episode's first,
+    and ``infos["final_obs"]`` / ``infos["final_info"]`` (masked by ``infos["_final_obs"]``) hold the
+    finished episode's last observation and info. ``reset(seed=s)`` seeds env i with ``s + i``.
+
+    Keyword arguments are those of :class:`snakesim.SnakeEnv` (without ``render_mode``).
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(self, num_envs: int = 16, **kwargs: Any) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        self._kwargs = dict(kwargs)
+        self._core = _core.VecEnv(env_config(**kwargs), num_envs)
+        self.num_envs = num_envs
+        joints, dim = self._core.joints, self._core.observation_dim
+        self.single_action_space = spaces.Box(-1.0, 1.0, (joints,), dtype=np.float32)
+        self.single_observation_space = spaces.Box(-np.inf, np.inf, (dim,), dtype=np.float32)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+
+    def reset(
+        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        if options:
+            raise ValueError("SnakeVectorEnv.reset takes no options; use SnakeEnv to place a single snake")
+        if seed is None and not hasattr(self, "_seeded"):
+            seed = int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
+        self._seeded = True
+        return self._core.reset(seed), {}
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        obs, rewards, terminated, truncated, finals = self._core.step(np.asarray(actions))
+        infos: dict[str, Any] = {}
+        for index, final_obs, final_info in finals:
+            infos = self._add_info(infos, {"final_obs": final_obs, "final_info": final_info}, index)
+        return obs, rewards, terminated, truncated, infos
+
+    def close_extras(self, **kwargs: Any) -> None:
+        pass

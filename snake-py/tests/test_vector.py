@@ -1,0 +1,98 @@
+"""The batched env through SB3's VecEnv and Gymnasium's vector API."""
+
+import numpy as np
+import pytest
+import snakesim
+from snakesim import SnakeVecEnv, SnakeVectorEnv
+
+
+def single_env_rollout(seed, actions, **kwargs):
+    env = snakesim.SnakeEnv(**kwargs)
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    for a in actions:
+        obs, reward, terminated, truncated, _ = env.step(a)
+        out.append((obs, reward, terminated, truncated))
+        if terminated or truncated:
+            obs, _ = env.reset()
+            out.append(obs)
+    return out
+
+
+def test_sb3_vec_env_matches_single_envs_bit_for_bit():
+    m, n, steps = 4, 3, 120
+    rng = np.random.default_rng(1)
+    actions = rng.uniform(-1, 1, (steps, m, n)).astype(np.float32)
+    venv = SnakeVecEnv(m, joints=n, max_episode_steps=50)
+    venv.seed(100)
+    obs = venv.reset()
+    for i in range(m):
+        single = single_env_rollout(100 + i, actions[:, i], joints=n, max_episode_steps=50)
+        assert obs[i].tobytes() == single[0].tobytes()
+    stepped = [venv.step(a) for a in actions]
+    for i in range(m):
+        single = single_env_rollout(100 + i, actions[:, i], joints=n, max_episode_steps=50)
+        k = 1
+        for obs, rewards, dones, infos in stepped:
+            s_obs, s_reward, s_term, s_trunc = single[k]
+            assert rewards[i] == np.float32(s_reward)
+            assert dones[i] == (s_term or s_trunc)
+            if dones[i]:
+                assert infos[i]["terminal_observation"].tobytes() == s_obs.tobytes()
+                assert infos[i]["TimeLimit.truncated"] == (s_trunc and not s_term)
+                k += 1
+                assert obs[i].tobytes() == single[k].tobytes(), "the next episode's first observation"
+            else:
+                assert obs[i].tobytes() == s_obs.tobytes()
+            k += 1
+
+
+def test_sb3_accepts_it():
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    venv = VecMonitor(SnakeVecEnv(2, joints=3, max_episode_steps=64))
+    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=1, seed=0, device="cpu")
+    model.learn(256)
+    assert model.num_timesteps == 256
+    assert len(model.ep_info_buffer) >= 2, "VecMonitor saw the truncated episodes"
+
+
+def test_gymnasium_vector_env_same_step_autoreset():
+    venv = SnakeVectorEnv(3, joints=2, max_episode_steps=5)
+    obs, info = venv.reset(seed=7)
+    assert obs.shape == (3, 6) and obs.dtype == np.float32
+    assert venv.observation_space.shape == (3, 6) and venv.action_space.shape == (3, 2)
+    for _ in range(5):
+        obs, rewards, terminated, truncated, infos = venv.step(np.zeros((3, 2), np.float32))
+    assert truncated.all() and not terminated.any()
+    assert infos["_final_obs"].all()
+    assert all(o.shape == (6,) for o in infos["final_obs"])
+    assert (infos["final_info"]["episode_step"] == 5).all()
+    single = snakesim.SnakeEnv(joints=2)
+    first, _ = single.reset(seed=7)
+    _, _ = single.reset(seed=7)
+    assert venv.reset(seed=7)[0][0].tobytes() == first.tobytes()
+
+
+@pytest.mark.parametrize(
+    ("actions", "error", "match"),
+    [
+        (np.zeros((2, 3), np.float32), ValueError, r"shape \(3, 2\)"),
+        (np.zeros(6, np.float32), ValueError, "2-D"),
+        (np.zeros((3, 2), np.int32), TypeError, "float32 or float64"),
+        (np.full((3, 2), np.nan), ValueError, "finite"),
+    ],
+)
+def test_bad_batched_actions(actions, error, match):
+    venv = SnakeVecEnv(3, joints=2)
+    venv.reset()
+    with pytest.raises(error, match=match):
+        venv.step(actions)
+
+
+def test_bad_num_envs():
+    with pytest.raises(ValueError, match="num_envs"):
+        SnakeVecEnv(0, joints=2)
+    with pytest.raises(ValueError, match="num_envs"):
+        SnakeVectorEnv(-1, joints=2)
