@@ -1,6 +1,7 @@
 //! `snake-cli`: run the snake's gait, run the environment, benchmark.
 
 mod bench;
+mod env_run;
 mod plot;
 mod run;
 mod trajectory;
@@ -21,6 +22,8 @@ struct Cli {
 enum Command {
     /// Run a gait and report the snake's motion; optionally write the trajectory (CSV) and a plot (PNG).
     Run(run::RunArgs),
+    /// Run episodes of the RL environment with a fixed policy (random, zero or the gait).
+    Env(env_run::EnvArgs),
     /// Measure physics steps per second (and pybullet's, when its reference environment exists).
     Bench(bench::BenchArgs),
 }
@@ -29,6 +32,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
+        Command::Env(args) => env_run::run(&args),
         Command::Bench(args) => bench::bench(&args),
     };
     match result {

@@ -98,6 +98,50 @@ fn run_writes_a_png_plot() {
     assert_eq!((width, height), (900, 900));
 }
 
+#[test]
+fn env_runs_episodes_with_each_policy() {
+    for policy in ["random", "zero", "gait"] {
+        let out = snake_cli(&[
+            "env",
+            "--joints",
+            "3",
+            "--policy",
+            policy,
+            "--episodes",
+            "2",
+            "--max-steps",
+            "40",
+            "--seed",
+            "3",
+        ]);
+        assert!(
+            out.status.success(),
+            "{policy}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains(&format!("policy {policy}")), "{text}");
+        assert!(
+            text.contains("2 episodes, 0 reached the goal; 80 env steps"),
+            "{text}"
+        );
+    }
+    // A goal under the start is reached at once by any policy.
+    let out = snake_cli(&[
+        "env",
+        "--joints",
+        "2",
+        "--policy",
+        "zero",
+        "--episodes",
+        "1",
+        "--goal",
+        "0,0.2",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("1 episodes, 1 reached the goal"), "{text}");
+}
+
 /// Bad input: one line on stderr naming the problem, a non-zero exit, never a panic.
 #[test]
 fn bad_input_is_one_clear_line() {
@@ -120,6 +164,11 @@ fn bad_input_is_one_clear_line() {
             "cannot write plot",
         ),
         (&["bench", "--joints", "0"], "--joints"),
+        (&["env", "--joints", "0"], "--joints"),
+        (&["env", "--policy", "fly"], "--policy"),
+        (&["env", "--goal", "1"], "X,Y"),
+        (&["env", "--goal", "nan,1"], "finite"),
+        (&["env", "--episodes", "0"], "--episodes"),
         (&["run", "--no-such-option"], "unexpected argument"),
     ];
     for (args, needle) in cases {
