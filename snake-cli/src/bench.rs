@@ -8,8 +8,10 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::{Gait, LateralUndulation, Preset, Snake, StartPose};
 
-/// The pybullet side of the benchmark, run by the reference Python.
-const PYBULLET_BENCH: &str = include_str!("../../tests/reference/pybullet_bench.py");
+/// The pybullet side of the benchmark, in the repository this binary was built from.
+fn pybullet_bench_script() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/pybullet_bench.py")
+}
 
 /// Arguments of `snake-cli bench`.
 #[derive(Args, Debug)]
@@ -70,9 +72,15 @@ fn find_python(explicit: Option<&Path>) -> Option<PathBuf> {
 
 fn pybullet_rates(python: &Path, args: &BenchArgs) -> Result<serde_json::Value> {
     let joints: Vec<String> = args.joints.iter().map(|j| j.to_string()).collect();
+    let script = pybullet_bench_script();
+    if !script.exists() {
+        bail!(
+            "{} is missing (run bench from a snakesim checkout)",
+            script.display()
+        );
+    }
     let out = Command::new(python)
-        .arg("-c")
-        .arg(PYBULLET_BENCH)
+        .arg(&script)
         .arg(joints.join(","))
         .arg(args.steps.to_string())
         .arg(args.repeats.to_string())

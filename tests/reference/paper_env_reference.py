@@ -40,8 +40,9 @@ from pybullet_utils import bullet_client
 HALF_EXTENT = 0.25
 
 
-def create_snake(client, joints, base_position, base_orientation):
-    """SnakeRobot.create_snake: base 0.06 kg, links 1 kg, one shared GEOM_BOX, friction on every cube."""
+def create_snake(client, joints, base_position, base_orientation, link_mass=1):
+    """SnakeRobot.create_snake: base 0.06 kg, links `link_mass` (the paper's code: 1 kg), one shared
+    GEOM_BOX, friction on every cube."""
     box = client.createCollisionShape(p.GEOM_BOX, halfExtents=[HALF_EXTENT] * 3)
     uid = client.createMultiBody(
         0.06,
@@ -49,7 +50,7 @@ def create_snake(client, joints, base_position, base_orientation):
         -1,
         base_position,
         base_orientation,
-        linkMasses=[1] * joints,
+        linkMasses=[link_mass] * joints,
         linkCollisionShapeIndices=[box] * joints,
         linkVisualShapeIndices=[-1] * joints,
         linkPositions=[[0, HALF_EXTENT * 2.0 + 0.01, 0]] * joints,

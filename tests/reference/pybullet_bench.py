@@ -7,40 +7,25 @@ world and times only the control-and-step loop, as `snake-cli bench` does for sn
 
 import json
 import math
+import os
 import sys
 import time
 
 import pybullet as p
 from pybullet_utils import bullet_client
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from paper_env_reference import create_snake  # noqa: E402
+
 HALF = 0.25
 DT = 1.0 / 240.0
 
 
 def build(client, joints):
+    """The paper's snake (every cube 0.06 kg) resting on the plane."""
     client.createMultiBody(0, client.createCollisionShape(p.GEOM_PLANE))
     client.setGravity(0, 0, -9.81)
-    box = client.createCollisionShape(p.GEOM_BOX, halfExtents=[HALF] * 3)
-    uid = client.createMultiBody(
-        0.06,
-        box,
-        -1,
-        [0, 0, HALF],
-        [0, 0, 0, 1],
-        linkMasses=[0.06] * joints,
-        linkCollisionShapeIndices=[box] * joints,
-        linkVisualShapeIndices=[-1] * joints,
-        linkPositions=[[0, HALF * 2.0 + 0.01, 0]] * joints,
-        linkOrientations=[[0, 0, 0, 1]] * joints,
-        linkInertialFramePositions=[[0, 0, 0]] * joints,
-        linkInertialFrameOrientations=[[0, 0, 0, 1]] * joints,
-        linkParentIndices=list(range(joints)),
-        linkJointTypes=[p.JOINT_REVOLUTE] * joints,
-        linkJointAxis=[[0, 0, 1]] * joints,
-    )
-    for link in range(-1, joints):
-        client.changeDynamics(uid, link, lateralFriction=5, anisotropicFriction=[1, 0.01, 0.01])
-    return uid
+    return create_snake(client, joints, [0, 0, HALF], [0, 0, 0, 1], link_mass=0.06)
 
 
 def one_run(joints, steps):

@@ -31,39 +31,23 @@ import sys
 import pybullet as p
 from pybullet_utils import bullet_client
 
-HALF_EXTENT = 0.25
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from paper_env_reference import HALF_EXTENT, create_snake  # noqa: E402
+
 DT = 1.0 / 240.0
 MASSES = {"paper": (0.06, 0.06), "snakebot-gym": (0.06, 1.0)}
 
 
 def build(client, joints, preset, start):
+    """The plane, gravity, then the snake as the paper's code builds it."""
     base_mass, link_mass = MASSES[preset]
+    assert base_mass == 0.06, "create_snake builds the paper's 0.06 kg base"
     plane = client.createCollisionShape(p.GEOM_PLANE)
     client.createMultiBody(0, plane)
     client.setGravity(0, 0, -9.81)
-    box = client.createCollisionShape(p.GEOM_BOX, halfExtents=[HALF_EXTENT] * 3)
     x, y, z, yaw = start
     orientation = client.getQuaternionFromEuler((0, 0, yaw))
-    uid = client.createMultiBody(
-        base_mass,
-        box,
-        -1,
-        [x, y, z],
-        orientation,
-        linkMasses=[link_mass] * joints,
-        linkCollisionShapeIndices=[box] * joints,
-        linkVisualShapeIndices=[-1] * joints,
-        linkPositions=[[0, HALF_EXTENT * 2.0 + 0.01, 0]] * joints,
-        linkOrientations=[[0, 0, 0, 1]] * joints,
-        linkInertialFramePositions=[[0, 0, 0]] * joints,
-        linkInertialFrameOrientations=[[0, 0, 0, 1]] * joints,
-        linkParentIndices=list(range(joints)),
-        linkJointTypes=[p.JOINT_REVOLUTE] * joints,
-        linkJointAxis=[[0, 0, 1]] * joints,
-    )
-    for link in range(-1, joints):
-        client.changeDynamics(uid, link, lateralFriction=5, anisotropicFriction=[1, 0.01, 0.01])
-    return uid
+    return create_snake(client, joints, [x, y, z], orientation, link_mass=link_mass)
 
 
 class SnakeWave:
