@@ -123,6 +123,22 @@ class SnakeEnv(gymnasium.Env):
             self._trail.append((float(obs[0]), float(obs[1])))
         return obs, reward, terminated, truncated, info
 
+    def cube_poses(self) -> np.ndarray:
+        """The pose of every cube now, shape (N + 1, 7): x, y, z, qx, qy, qz, qw (metres; quaternion
+        x, y, z, w), the head (base) first, as a fresh array. Raises RuntimeError before the first reset."""
+        return np.asarray(self._env.cube_poses(), dtype=np.float64)
+
+    @property
+    def goal(self) -> tuple[float, float]:
+        """The current episode's goal (x, y): ``goal``, or the one passed in ``reset(options=...)``."""
+        x, y = self._env.goal
+        return float(x), float(y)
+
+    @property
+    def half_extent(self) -> float:
+        """Half the side of each cube, metres."""
+        return float(self._env.half_extent)
+
     def render(self) -> np.ndarray | None:
         """A top-down RGB image (``render_mode="rgb_array"``) of the snake, its path and the goal."""
         if self.render_mode is None:

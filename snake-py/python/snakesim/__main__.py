@@ -1,0 +1,7 @@
+"""``python -m snakesim``: the ``snakesim`` command (see snakesim.cli)."""
+
+import sys
+
+from snakesim.cli import main
+
+sys.exit(main())

@@ -1,0 +1,362 @@
+"""Trained agents: loading them (run directories, SB3 2.x zips, the paper's SB3 1.x zips) and running
+evaluation episodes.
+
+An :class:`Agent` is a policy plus what it needs to act in snakesim: the env keywords it was trained
+with and, for runs trained with ``normalize: true``, the observation statistics.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import pickle
+import re
+import zipfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snakesim import runconfig
+
+MODEL_FILE = "model.zip"
+VECNORMALIZE_FILE = "vecnormalize.pkl"
+CONFIG_FILE = "config.yaml"
+CHECKPOINT_DIR = "checkpoints"
+_CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
+
+
+class AgentError(ValueError):
+    """A model or run directory that cannot be used; the message says why."""
+
+
+@dataclasses.dataclass
+class ModelInfo:
+    """What a zip's ``data`` tells without loading it."""
+
+    sb3_version: str
+    observation_dim: int
+    action_dim: int
+    legacy: bool  # saved by SB3 1.x with gym's spaces
+    num_timesteps: int | None
+
+
+@dataclasses.dataclass
+class Agent:
+    policy: Any  # stable_baselines3 ActorCriticPolicy
+    path: str  # the zip
+    env_kwargs: dict[str, Any]  # joints, preset and the rest of the env's keywords
+    arch: str
+    sb3_version: str
+    num_timesteps: int | None
+    obs_normalizer: Any = None  # a VecNormalize whose statistics normalise observations, or None
+    config: dict[str, Any] | None = None  # the run's config.yaml, when loaded from a run directory
+
+    @property
+    def joints(self) -> int:
+        return int(self.env_kwargs["joints"])
+
+    def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
+        if self.obs_normalizer is not None:
+            obs = self.obs_normalizer.normalize_obs(obs)
+        actions, _ = self.policy.predict(obs, deterministic=deterministic)
+        return actions
+
+
+def checkpoints(run_dir: str | os.PathLike) -> list[tuple[int, Path]]:
+    """The run's checkpoints as (timesteps, path), oldest first."""
+    folder = Path(run_dir) / CHECKPOINT_DIR
+    if not folder.is_dir():
+        return []
+    found = []
+    for path in folder.iterdir():
+        match = _CHECKPOINT.match(path.name)
+        if match:
+            found.append((int(match.group(1)), path))
+    return sorted(found)
+
+
+def checkpoint_paths(run_dir: str | os.PathLike, timesteps: int) -> tuple[Path, Path]:
+    folder = Path(run_dir) / CHECKPOINT_DIR
+    return folder / f"model_{timesteps}_steps.zip", folder / f"vecnormalize_{timesteps}_steps.pkl"
+
+
+def inspect_model(path: str | os.PathLike) -> ModelInfo:
+    """Reads a SB3 zip's metadata; AgentError when it is not one."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            names = set(archive.namelist())
+            if "data" not in names or "policy.pth" not in names:
+                raise AgentError(f"{os.fspath(path)} is not a Stable-Baselines3 model (no data/policy.pth)")
+            data = json.loads(archive.read("data"))
+            version = (
+                archive.read("_stable_baselines3_version").decode().strip()
+                if "_stable_baselines3_version" in names
+                else "unknown"
+            )
+    except FileNotFoundError:
+        raise AgentError(f"{os.fspath(path)} does not exist") from None
+    except (zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError, IsADirectoryError):
+        raise AgentError(f"{os.fspath(path)} is not a Stable-Baselines3 model zip") from None
+
+    def shape(space: Any) -> list[int]:
+        # gym (SB3 1.x) wrote "shape", gymnasium writes "_shape".
+        return list(space["shape"] if "shape" in space else space["_shape"])
+
+    try:
+        obs_shape = shape(data["observation_space"])
+        act_shape = shape(data["action_space"])
+        space_type = str(data["observation_space"].get(":type:", ""))
+    except (KeyError, TypeError):
+        raise AgentError(f"{os.fspath(path)} has no Box observation/action spaces") from None
+    if len(obs_shape) != 1 or len(act_shape) != 1:
+        raise AgentError(f"{os.fspath(path)}: expected flat Box spaces, got {obs_shape} and {act_shape}")
+    legacy = version.startswith(("0.", "1.")) or "'gym." in space_type
+    steps = data.get("num_timesteps")
+    return ModelInfo(
+        version, int(obs_shape[0]), int(act_shape[0]), legacy, steps if isinstance(steps, int) else None
+    )
+
+
+def _spaces(obs_dim: int, act_dim: int):
+    from gymnasium import spaces
+
+    return (
+        spaces.Box(-np.inf, np.inf, (obs_dim,), dtype=np.float32),
+        spaces.Box(-1.0, 1.0, (act_dim,), dtype=np.float32),
+    )
+
+
+def _load_legacy_policy(path: Path, info: ModelInfo, device: str):
+    """An SB3 1.x zip (gym spaces, 1.x schedules) as an SB3 2.x ActorCriticPolicy.
+
+    Nothing of the zip is unpickled: the spaces come from its JSON, every pickled field is replaced,
+    and the weights are renamed where 1.x named them differently (shared layers).
+    """
+    from stable_baselines3.common.policies import ActorCriticPolicy
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    from snakesim.policies import convert_legacy_state_dict, parse_legacy_net_arch, policy_kwargs
+
+    with zipfile.ZipFile(path) as archive:
+        raw = json.loads(archive.read("data"))
+    observation_space, action_space = _spaces(info.observation_dim, info.action_dim)
+    replacements = {"observation_space": observation_space, "action_space": action_space}
+    custom = {
+        key: replacements.get(key)
+        for key, value in raw.items()
+        if isinstance(value, Mapping) and ":serialized:" in value
+    }
+    data, params, _ = load_from_zip_file(path, custom_objects=custom, device=device)
+    kwargs = dict((data or {}).get("policy_kwargs") or {})
+    net_arch = kwargs.pop("net_arch", None)
+    if kwargs:
+        raise AgentError(f"{path}: unsupported SB3 1.x policy_kwargs {sorted(kwargs)} (only net_arch)")
+    if (data or {}).get("use_sde"):
+        raise AgentError(f"{path}: SB3 1.x models with gSDE are not supported")
+    try:
+        arch, shared = parse_legacy_net_arch(net_arch)
+    except ValueError as error:
+        raise AgentError(f"{path}: {error}") from None
+    policy = ActorCriticPolicy(
+        observation_space,
+        action_space,
+        lambda _: 0.0,
+        **policy_kwargs(arch, shared=shared or (128, 128)),
+    ).to(device)
+    try:
+        policy.load_state_dict(convert_legacy_state_dict(params["policy"]))
+    except RuntimeError as error:
+        first = str(error).strip().splitlines()[0]
+        raise AgentError(f"{path}: the weights do not fit the SB3 1.x network: {first}") from None
+    policy.set_training_mode(False)
+    return policy, arch
+
+
+def _load_policy(path: Path, info: ModelInfo, device: str):
+    if info.legacy:
+        return _load_legacy_policy(path, info, device)
+    from stable_baselines3 import PPO
+
+    try:
+        model = PPO.load(path, device=device)
+    except (KeyError, ValueError, RuntimeError) as error:
+        raise AgentError(f"cannot load {path} as a PPO model: {error}") from None
+    extractor = type(model.policy.features_extractor).__name__
+    arch = "large" if extractor == "SharedMlp" else "small"
+    return model.policy, arch
+
+
+def load_agent(
+    source: str | os.PathLike,
+    *,
+    joints: int | None = None,
+    preset: str | None = None,
+    env_overrides: Mapping[str, Any] | None = None,
+    device: str = "cpu",
+) -> Agent:
+    """A run directory (its model.zip, else its latest checkpoint; its config.yaml) or a bare SB3 zip.
+
+    For a run directory, ``joints`` and ``preset`` must agree with its config when given. For a bare
+    zip, ``joints`` defaults to what the model's action space says and ``preset`` to ``paper``.
+    """
+    source = Path(source)
+    config = None
+    normalizer_path = None
+    if source.is_dir():
+        config_path = source / CONFIG_FILE
+        if not config_path.is_file():
+            raise AgentError(f"{source} is not a run directory (no {CONFIG_FILE})")
+        try:
+            config = runconfig.load(config_path)
+        except runconfig.ConfigError as error:
+            raise AgentError(str(error)) from None
+        model_path = source / MODEL_FILE
+        normalizer_path = source / VECNORMALIZE_FILE
+        if not model_path.is_file():
+            found = checkpoints(source)
+            if not found:
+                raise AgentError(f"{source} has no {MODEL_FILE} and no checkpoints yet")
+            steps, model_path = found[-1]
+            normalizer_path = checkpoint_paths(source, steps)[1]
+        for name, given in (("joints", joints), ("preset", preset)):
+            if given is not None and given != config[name]:
+                raise AgentError(f"{source} was trained with {name} {config[name]}, not {given}")
+        env_kwargs = runconfig.env_kwargs(config)
+    elif source.exists() or source.suffix == ".zip":
+        model_path = source
+        env_kwargs = {"joints": joints, "preset": preset or "paper"}
+    else:
+        raise AgentError(f"{source} does not exist (expected a run directory or a model .zip)")
+
+    info = inspect_model(model_path)
+    if env_kwargs["joints"] is None:
+        env_kwargs["joints"] = info.action_dim
+    env_kwargs.update(env_overrides or {})
+    try:
+        runconfig.check_env_kwargs(env_kwargs)
+    except runconfig.ConfigError as error:
+        raise AgentError(str(error)) from None
+    from snakesim.env import SnakeEnv
+
+    probe = SnakeEnv(**env_kwargs)
+    obs_dim, act_dim = probe.observation_space.shape[0], probe.action_space.shape[0]
+    if (info.observation_dim, info.action_dim) != (obs_dim, act_dim):
+        raise AgentError(
+            f"{model_path} expects {info.observation_dim} observations and {info.action_dim} actions, but "
+            f"the env ({env_kwargs['joints']} joints) has {obs_dim} and {act_dim}: pass --joints "
+            f"{info.action_dim} (or the observation it was trained with)"
+        )
+    policy, arch = _load_policy(model_path, info, device)
+    normalizer = None
+    if normalizer_path is not None and normalizer_path.is_file():
+        with open(normalizer_path, "rb") as f:
+            normalizer = pickle.load(f)
+        normalizer.training = False
+    return Agent(
+        policy=policy,
+        path=os.fspath(model_path),
+        env_kwargs=env_kwargs,
+        arch=config["arch"] if config else arch,
+        sb3_version=info.sb3_version,
+        num_timesteps=info.num_timesteps,
+        obs_normalizer=normalizer,
+        config=config,
+    )
+
+
+@dataclasses.dataclass
+class Episode:
+    ret: float  # the return
+    steps: int  # env steps
+    success: bool  # reached the goal (terminated), not truncated
+    seconds: float  # simulated time of the episode
+    distance: float  # head displacement from the start to the end, metres
+
+    @property
+    def speed(self) -> float:
+        return self.distance / self.seconds if self.seconds > 0 else 0.0
+
+
+def run_episodes(
+    act: Any,
+    env_kwargs: Mapping[str, Any],
+    episodes: int,
+    seed: int,
+    max_envs: int = 16,
+) -> list[Episode]:
+    """Runs ``episodes`` episodes of ``act(obs_batch) -> actions`` in a batched env of its own.
+
+    Up to ``max_envs`` episodes run at once, env i seeded with ``seed + i`` (its later episodes
+    continue its stream), so a seed gives the same episodes whatever the policy.
+    """
+    from snakesim.env import SnakeEnv
+    from snakesim.sb3 import SnakeVecEnv
+
+    if episodes < 1:
+        raise ValueError(f"episodes must be at least 1, got {episodes}")
+    config = SnakeEnv(**env_kwargs).config
+    step_seconds = config["snake"]["dt"] * config["physics_steps_per_env_step"]
+    m = min(episodes, max_envs)
+    targets = [(episodes + i) // m for i in range(m)]  # as SB3's evaluate_policy splits them
+    counts = [0] * m
+    venv = SnakeVecEnv(m, **env_kwargs)
+    venv.seed(seed)
+    obs = venv.reset()
+    done_episodes: list[Episode] = []
+    while counts != targets:
+        obs, _, dones, infos = venv.step(act(obs))
+        for i in np.flatnonzero(dones):
+            if counts[i] >= targets[i]:
+                continue
+            info = infos[i]
+            final = info["terminal_observation"]
+            start = info["start"]
+            done_episodes.append(
+                Episode(
+                    ret=float(info["episode_return"]),
+                    steps=int(info["episode_step"]),
+                    success=bool(info["success"]),
+                    seconds=int(info["episode_step"]) * step_seconds,
+                    distance=float(math.hypot(final[0] - start[0], final[1] - start[1])),
+                )
+            )
+            counts[i] += 1
+    venv.close()
+    return done_episodes
+
+
+def summarize(episodes: list[Episode]) -> dict[str, Any]:
+    """Mean/std return, success rate, mean steps and seconds to goal (successes only), mean speed."""
+    returns = np.array([e.ret for e in episodes])
+    wins = [e for e in episodes if e.success]
+    return {
+        "episodes": len(episodes),
+        "success_rate": len(wins) / len(episodes),
+        "mean_return": float(returns.mean()),
+        "std_return": float(returns.std()),
+        "mean_steps_to_goal": float(np.mean([e.steps for e in wins])) if wins else None,
+        "mean_seconds_to_goal": float(np.mean([e.seconds for e in wins])) if wins else None,
+        "mean_speed": float(np.mean([e.speed for e in episodes])),
+        "mean_length": float(np.mean([e.steps for e in episodes])),
+    }
+
+
+def evaluate(agent: Agent, episodes: int, seed: int, deterministic: bool = True) -> dict[str, Any]:
+    """:func:`summarize` of ``episodes`` episodes of the agent, with the per-episode figures."""
+    done = run_episodes(lambda obs: agent.act(obs, deterministic), agent.env_kwargs, episodes, seed)
+    out = summarize(done)
+    out["per_episode"] = [
+        {
+            "return": e.ret,
+            "steps": e.steps,
+            "success": e.success,
+            "seconds": e.seconds,
+            "speed": e.speed,
+        }
+        for e in done
+    ]
+    return out

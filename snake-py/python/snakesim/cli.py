@@ -1,0 +1,432 @@
+"""The ``snakesim`` command: train PPO as the paper did, then evaluate, plot and replay the agents.
+
+    snakesim train --joints 5 --arch small [--config snake-py/configs/paper-small-5.yaml] [...]
+    snakesim evaluate RUN_OR_MODEL [--episodes 100] [--json out.json]
+    snakesim plot RUN [RUN ...] --out fig.png
+    snakesim replay RUN_OR_MODEL --out motion.png --out motion.gif
+
+``snakesim COMMAND --help`` lists every option. Errors print one line on stderr and exit non-zero
+(2 for bad usage, 1 for anything else, 130 after Ctrl-C).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+from pathlib import Path
+from typing import Any, NoReturn
+
+from snakesim import runconfig
+from snakesim.config import PRESETS
+
+
+class UserError(Exception):
+    """An error of the user's input: reported as one line, no traceback."""
+
+
+def _one_line(message: object) -> str:
+    return " ".join(str(message).split())
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {_one_line(message)} (see {self.prog} --help)\n")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text.replace("_", ""))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {value}")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text.replace("_", ""))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value}")
+    return value
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text}")
+    return value
+
+
+def check_writable(path: str | os.PathLike, what: str = "") -> Path:
+    """The output path, if its directory exists and is writable; UserError otherwise."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    label = f"{what} {path}" if what else str(path)
+    if path.is_dir():
+        raise UserError(f"cannot write {label}: it is a directory")
+    if not parent.is_dir():
+        raise UserError(f"cannot write {label}: directory {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise UserError(f"cannot write {label}: directory {parent} is not writable")
+    return path
+
+
+# -- train ----------------------------------------------------------------------------------------
+# Command-line flags that set configuration keys (argparse dest -> key).
+_TRAIN_FLAGS = (
+    "joints",
+    "arch",
+    "preset",
+    "timesteps",
+    "n_envs",
+    "seed",
+    "eval_freq",
+    "eval_episodes",
+    "eval_seed",
+    "checkpoint_freq",
+    "normalize",
+    "device",
+    "torch_threads",
+)
+
+
+def _train_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    overrides: dict[str, Any] = {}
+    if args.config is not None:
+        data = runconfig.load_yaml(args.config)
+        try:
+            runconfig.validate(data)
+        except runconfig.ConfigError as error:
+            raise runconfig.ConfigError(f"{args.config}: {error}") from None
+        overrides = data
+    overrides = runconfig.merge(overrides, runconfig.parse_set(args.set))
+    for key in _TRAIN_FLAGS:
+        if hasattr(args, key):
+            overrides[key] = getattr(args, key)
+    return overrides
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from snakesim.train import Trainer, TrainingInterrupted
+
+    trainer = Trainer(
+        _train_overrides(args),
+        run_dir=args.run_dir,
+        resume=args.resume,
+        progress=args.progress,
+        verbose=1 if args.verbose else 0,
+    )
+    config = trainer.config
+    print(
+        f"run {trainer.run_dir}: PPO-{config['arch']}, {config['joints']} joints, preset {config['preset']}, "
+        f"{config['timesteps']:,} timesteps, {config['n_envs']} envs, seed {config['seed']}"
+        + (f" (resuming from {trainer.resume_from[0]:,})" if trainer.resume_from else ""),
+        flush=True,
+    )
+    try:
+        result = trainer.run()
+    except TrainingInterrupted as stop:
+        print(
+            f"snakesim train: interrupted at {stop.timesteps:,} timesteps; saved {stop.path} and "
+            f"{trainer.run_dir / 'model.zip'}; continue with: "
+            f"snakesim train --run-dir {trainer.run_dir} --resume",
+            file=sys.stderr,
+        )
+        return 130
+    import torch
+
+    print(
+        f"trained {result.timesteps - result.start_timesteps:,} timesteps in {result.seconds:.1f} s: "
+        f"{result.timesteps_per_second:.0f} timesteps/s ({result.training_timesteps_per_second:.0f} without "
+        f"evaluations; device {trainer.model.device}, {torch.get_num_threads()} torch threads)"
+    )
+    last = result.last_evaluation
+    if last is not None:
+        steps = "-" if last["mean_steps_to_goal"] is None else f"{last['mean_steps_to_goal']:.0f}"
+        print(
+            f"evaluation at {last['timesteps']:,} timesteps ({config['eval_episodes']} episodes): "
+            f"mean return {last['mean_return']:.1f} ± {last['std_return']:.1f}, "
+            f"success rate {last['success_rate']:.2f}, mean steps to goal {steps}"
+        )
+    print(f"wrote {result.run_dir}/model.zip, evaluations.csv, config.yaml, versions.json, tb/, checkpoints/")
+    return 0
+
+
+# -- evaluate -------------------------------------------------------------------------------------
+def _load_agent(args: argparse.Namespace):
+    from snakesim.agents import load_agent
+
+    return load_agent(args.source, joints=args.joints, preset=args.preset)
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from snakesim.agents import evaluate
+
+    if args.json is not None and args.json != "-":
+        check_writable(args.json, "--json")
+    agent = _load_agent(args)
+    result = evaluate(agent, args.episodes, args.seed, deterministic=not args.stochastic)
+    report = {
+        "model": agent.path,
+        "arch": agent.arch,
+        "joints": agent.joints,
+        "preset": agent.env_kwargs["preset"],
+        "sb3_version": agent.sb3_version,
+        "trained_timesteps": agent.num_timesteps,
+        "seed": args.seed,
+        "deterministic": not args.stochastic,
+        **result,
+    }
+    text = json.dumps(report, indent=2) + "\n"
+    if args.json == "-":
+        sys.stdout.write(text)
+        return 0
+    if args.json is not None:
+        try:
+            Path(args.json).write_text(text)
+        except OSError as error:
+            raise UserError(f"cannot write --json {args.json}: {error.strerror or error}") from None
+    steps = report["mean_steps_to_goal"]
+    seconds = report["mean_seconds_to_goal"]
+    mode = "stochastic" if args.stochastic else "deterministic"
+    rows = [
+        ("model", f"{agent.path} (PPO-{agent.arch}, SB3 {agent.sb3_version})"),
+        ("env", f"{agent.joints} joints, preset {report['preset']}"),
+        (
+            "episodes",
+            f"{report['episodes']} (seed {args.seed}, {mode})",
+        ),
+        ("success rate", f"{report['success_rate']:.3f}"),
+        ("mean return", f"{report['mean_return']:.1f} ± {report['std_return']:.1f}"),
+        ("mean steps to goal", "-" if steps is None else f"{steps:.1f} ({seconds:.2f} s)"),
+        ("mean speed", f"{report['mean_speed']:.3f} m/s"),
+    ]
+    width = max(len(name) for name, _ in rows)
+    for name, value in rows:
+        print(f"{name:<{width}}  {value}")
+    if args.json is not None:
+        print(f"wrote {args.json}")
+    return 0
+
+
+# -- plot -----------------------------------------------------------------------------------------
+def cmd_plot(args: argparse.Namespace) -> int:
+    from snakesim.plots import plot_runs
+
+    out = check_writable(args.out, "--out")
+    if out.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise UserError(f"cannot write --out {out}: expected a .png, .pdf or .svg file")
+    drawn = plot_runs(
+        args.runs, out, title=args.title, metric=args.metric, group=args.group, spread=args.spread
+    )
+    print(f"wrote {out}: " + "; ".join(label for label, _ in drawn))
+    return 0
+
+
+# -- replay ---------------------------------------------------------------------------------------
+def cmd_replay(args: argparse.Namespace) -> int:
+    from snakesim import replay
+
+    outs = [check_writable(out, "--out") for out in args.out]
+    kinds = [replay.check_output(out) for out in outs]
+    agent = _load_agent(args)
+    rec = replay.record(
+        lambda obs: agent.act(obs, args.deterministic), agent.env_kwargs, seconds=args.seconds, seed=args.seed
+    )
+    outcome = "reached the goal" if rec.terminated else "did not reach the goal"
+    print(f"replayed {rec.duration:.2f} s ({len(rec.times) - 1} steps): {outcome}, return {rec.ret:.1f}")
+    title = args.title if args.title is not None else f"PPO-{agent.arch}, {agent.joints} joints"
+    for out, kind in zip(outs, kinds):
+        if kind == "figure":
+            replay.draw_strip(rec, out, panels=args.panels, title=title)
+            print(f"wrote {out} ({args.panels} moments and the path)")
+        else:
+            frames = (replay.write_gif if kind == "gif" else replay.write_mp4)(rec, out, fps=args.fps)
+            print(f"wrote {out} ({frames} frames at {args.fps:g} fps)")
+    return 0
+
+
+# -- the parser -----------------------------------------------------------------------------------
+def _agent_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "source", metavar="RUN_OR_MODEL", help="a run directory or an SB3 model .zip (SB3 1.x or 2.x)"
+    )
+    p.add_argument(
+        "--joints", type=_positive_int, help="for a bare .zip: the snake's joints (default: from the model)"
+    )
+    p.add_argument("--preset", choices=PRESETS, help="for a bare .zip: the robot preset (default paper)")
+    p.add_argument("--seed", type=_count, default=0, help="seed of the episodes (default 0)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="snakesim",
+        description="Train, evaluate, plot and replay PPO agents of the 'Simulating Snakes' snake.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)
+    S = argparse.SUPPRESS
+
+    p = sub.add_parser(
+        "train",
+        help="train PPO (the paper's settings)",
+        description="Train SB3 PPO on snakesim. Configuration: defaults (the paper's Table 1) "
+        "< --config YAML < --set KEY=VALUE and the flags below.",
+    )
+    p.add_argument("--config", metavar="FILE.yaml", help="a run configuration (see snake-py/configs/)")
+    p.add_argument("--joints", type=_positive_int, default=S, help="snake joints (default 5)")
+    p.add_argument(
+        "--arch",
+        choices=runconfig.ARCHS,
+        default=S,
+        help="small: pi/vf [64, 64]; large: shared [128, 128] first",
+    )
+    p.add_argument("--preset", choices=PRESETS, default=S, help="robot preset (default paper)")
+    p.add_argument("--timesteps", type=_positive_int, default=S, help="total timesteps (default 20000000)")
+    p.add_argument(
+        "--n-envs", dest="n_envs", type=_positive_int, default=S, help="parallel envs (default 16)"
+    )
+    p.add_argument("--seed", type=_count, default=S, help="seed (default 42)")
+    p.add_argument(
+        "--eval-freq",
+        dest="eval_freq",
+        type=_count,
+        default=S,
+        help="evaluate every N timesteps (default 250000; 0: at the end only)",
+    )
+    p.add_argument(
+        "--eval-episodes",
+        dest="eval_episodes",
+        type=_positive_int,
+        default=S,
+        help="episodes per evaluation (default 10)",
+    )
+    p.add_argument(
+        "--eval-seed",
+        dest="eval_seed",
+        type=_count,
+        default=S,
+        help="seed of the evaluation episodes (default seed + 1000)",
+    )
+    p.add_argument(
+        "--checkpoint-freq",
+        dest="checkpoint_freq",
+        type=_count,
+        default=S,
+        help="checkpoint every N timesteps (default 1000000; 0: none)",
+    )
+    p.add_argument(
+        "--normalize", action="store_true", default=S, help="wrap the training env in VecNormalize"
+    )
+    p.add_argument("--device", default=S, help="auto, cpu, cuda or cuda:N (default auto)")
+    p.add_argument(
+        "--torch-threads",
+        dest="torch_threads",
+        type=_positive_int,
+        default=S,
+        help="torch CPU threads (default: torch's)",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="any config key, e.g. ppo.n_steps=256 or env.max_episode_steps=1000 (repeatable)",
+    )
+    p.add_argument(
+        "--run-dir", dest="run_dir", help="where the run goes (default runs/ppo-ARCH-JOINTS-PRESET-seedSEED)"
+    )
+    p.add_argument(
+        "--resume", action="store_true", help="continue the run in --run-dir from its latest checkpoint"
+    )
+    p.add_argument(
+        "--progress",
+        dest="progress",
+        action="store_true",
+        default=None,
+        help="show a progress bar (default: when stderr is a terminal)",
+    )
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    p.add_argument("--verbose", action="store_true", help="print SB3's training tables")
+    p.set_defaults(func=cmd_train)
+
+    p = sub.add_parser("evaluate", help="success rate, return, steps to goal and speed of an agent")
+    _agent_options(p)
+    p.add_argument("--episodes", type=_positive_int, default=100, help="episodes (default 100)")
+    p.add_argument(
+        "--stochastic", action="store_true", help="sample actions instead of the deterministic policy"
+    )
+    p.add_argument(
+        "--json", metavar="FILE", help="also write the results as JSON (- : print only JSON to stdout)"
+    )
+    p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("plot", help="learning curves (Figure 3)")
+    p.add_argument("runs", nargs="+", metavar="RUN", help="run directories (or evaluations.csv files)")
+    p.add_argument("--out", required=True, help="the figure (.png, .pdf or .svg)")
+    p.add_argument("--title", help="the figure's title")
+    p.add_argument(
+        "--metric", choices=("mean_return", "success_rate", "mean_steps_to_goal"), default="mean_return"
+    )
+    p.add_argument(
+        "--group",
+        choices=("auto", "none", "all"),
+        default="auto",
+        help="auto: runs differing only in seed are one line (mean, shaded spread)",
+    )
+    p.add_argument("--spread", choices=("minmax", "std"), default="minmax", help="the shaded band of a group")
+    p.set_defaults(func=cmd_plot)
+
+    p = sub.add_parser("replay", help="the snake at successive moments (Figure 4) and animations")
+    _agent_options(p)
+    p.add_argument(
+        "--out",
+        action="append",
+        required=True,
+        help="a .png/.pdf/.svg figure, .gif or .mp4 animation (repeatable)",
+    )
+    p.add_argument(
+        "--seconds", type=_seconds, help="stop after this many simulated seconds (default: the whole episode)"
+    )
+    p.add_argument(
+        "--deterministic",
+        action="store_true",
+        help="the deterministic policy (default: sample, as the paper's snake.py test)",
+    )
+    p.add_argument("--panels", type=_positive_int, default=7, help="moments in the figure (default 7)")
+    p.add_argument(
+        "--fps", type=_seconds, default=10.0, help="animation frames per simulated second (default 10)"
+    )
+    p.add_argument("--title", help="the figure's title")
+    p.set_defaults(func=cmd_replay)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    from snakesim.agents import AgentError
+    from snakesim.plots import PlotError
+    from snakesim.replay import ReplayError
+    from snakesim.train import RunDirError
+
+    try:
+        return args.func(args)
+    except (UserError, runconfig.ConfigError, AgentError, RunDirError, PlotError, ReplayError) as error:
+        print(f"snakesim {args.command}: error: {_one_line(error)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"snakesim {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

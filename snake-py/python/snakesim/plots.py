@@ -1,0 +1,163 @@
+"""Learning curves (the paper's Figure 3): evaluation return against timesteps, one line per run or per
+group of runs that differ only in their seed (mean line, shaded spread)."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snakesim import runconfig
+from snakesim.train import EVALUATIONS_FILE, read_evaluations
+
+METRICS = {
+    "mean_return": "mean evaluation return",
+    "success_rate": "evaluation success rate",
+    "mean_steps_to_goal": "mean steps to goal (successful episodes)",
+}
+# Keys that do not change what a run learns: runs equal but for these are seeds of one experiment.
+_NOT_THE_EXPERIMENT = ("seed", "eval_seed", "device", "torch_threads", "timesteps", "checkpoint_freq")
+
+
+class PlotError(ValueError):
+    """Runs that cannot be plotted; the message says why."""
+
+
+@dataclasses.dataclass
+class Curve:
+    name: str
+    config: dict[str, Any] | None
+    timesteps: np.ndarray
+    values: dict[str, np.ndarray]
+
+
+def load_curve(source: str | os.PathLike) -> Curve:
+    """A run directory (its evaluations.csv and config.yaml) or an evaluations.csv file."""
+    path = Path(source)
+    csv_path = path / EVALUATIONS_FILE if path.is_dir() else path
+    run_dir = csv_path.parent
+    if not csv_path.is_file():
+        raise PlotError(
+            f"{os.fspath(source)} has no {EVALUATIONS_FILE}" if path.is_dir() else f"{source} does not exist"
+        )
+    try:
+        rows = read_evaluations(csv_path)
+    except (ValueError, KeyError, OSError) as error:
+        raise PlotError(f"cannot read {csv_path}: {error}") from None
+    if not rows:
+        raise PlotError(f"{csv_path} has no evaluations yet")
+    config = None
+    if (run_dir / "config.yaml").is_file():
+        try:
+            config = runconfig.load(run_dir / "config.yaml")
+        except runconfig.ConfigError:
+            config = None
+    rows.sort(key=lambda row: row["timesteps"])
+    timesteps = np.array([row["timesteps"] for row in rows])
+    values = {metric: np.array([row[metric] for row in rows]) for metric in METRICS}
+    name = (path if path.is_dir() else run_dir).resolve().name
+    return Curve(name, config, timesteps, values)
+
+
+def _experiment_key(config: Mapping[str, Any] | None, name: str) -> str:
+    if config is None:
+        return f"run:{name}"
+    return runconfig.dump({k: v for k, v in config.items() if k not in _NOT_THE_EXPERIMENT})
+
+
+def _label(config: Mapping[str, Any] | None, fallback: str) -> str:
+    if config is None:
+        return fallback
+    return f"PPO-{config['arch']}, {config['joints']} joints ({config['preset']})"
+
+
+def group_curves(curves: Sequence[Curve], mode: str = "auto") -> list[tuple[str, list[Curve]]]:
+    """``auto``: runs whose configs differ only in seeds form a group; ``none``: one per run; ``all``."""
+    if mode == "none":
+        return [
+            (c.name if c.config is None else f"{_label(c.config, c.name)} [{c.name}]", [c]) for c in curves
+        ]
+    if mode == "all":
+        return [("all runs", list(curves))]
+    if mode != "auto":
+        raise PlotError(f"unknown group mode {mode!r} (expected auto, none or all)")
+    groups: dict[str, list[Curve]] = {}
+    for curve in curves:
+        groups.setdefault(_experiment_key(curve.config, curve.name), []).append(curve)
+    out = []
+    labels = [_label(members[0].config, members[0].name) for members in groups.values()]
+    for members, label in zip(groups.values(), labels):
+        if labels.count(label) > 1:  # same arch/joints/preset but other settings: name the runs
+            label = f"{label} [{', '.join(c.name for c in members)}]"
+        out.append((label, members))
+    return out
+
+
+def aggregate(curves: Sequence[Curve], metric: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(timesteps, mean, low, high) over runs, on the timesteps all of them cover (interpolated)."""
+    if len(curves) == 1:
+        c = curves[0]
+        v = c.values[metric]
+        return c.timesteps, v, v, v
+    lo = max(c.timesteps[0] for c in curves)
+    hi = min(c.timesteps[-1] for c in curves)
+    grid = np.unique(np.concatenate([c.timesteps for c in curves]))
+    grid = grid[(grid >= lo) & (grid <= hi)]
+    if grid.size == 0:
+        raise PlotError("the grouped runs' evaluations do not overlap in timesteps; use --group none")
+    stack = np.vstack([np.interp(grid, c.timesteps, c.values[metric]) for c in curves])
+    return grid, stack.mean(axis=0), stack.min(axis=0), stack.max(axis=0)
+
+
+def plot_runs(
+    sources: Sequence[str | os.PathLike],
+    out: str | os.PathLike,
+    *,
+    title: str | None = None,
+    metric: str = "mean_return",
+    group: str = "auto",
+    spread: str = "minmax",
+    dpi: int = 150,
+) -> list[tuple[str, int]]:
+    """Draws the curves into ``out`` (PNG, PDF or SVG by its suffix); returns (label, runs) per line."""
+    if metric not in METRICS:
+        raise PlotError(f"unknown metric {metric!r} (expected one of: {', '.join(METRICS)})")
+    if spread not in ("minmax", "std"):
+        raise PlotError(f"unknown spread {spread!r} (expected minmax or std)")
+    curves = [load_curve(source) for source in sources]
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.0, 4.5))
+    drawn = []
+    try:
+        for label, members in group_curves(curves, group):
+            x, mean, low, high = aggregate(members, metric)
+            if len(members) > 1:
+                if spread == "std":
+                    stack = np.vstack([np.interp(x, c.timesteps, c.values[metric]) for c in members])
+                    low, high = mean - stack.std(axis=0), mean + stack.std(axis=0)
+                label = f"{label}, {len(members)} runs"
+            (line,) = ax.plot(x, mean, label=label, linewidth=1.6)
+            if len(members) > 1:
+                ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, linewidth=0)
+            drawn.append((label, len(members)))
+        ax.set_xlabel("timesteps")
+        ax.set_ylabel(METRICS[metric])
+        ax.set_title(title if title is not None else f"Average {METRICS[metric]}")
+        ax.grid(True, alpha=0.3)
+        ax.ticklabel_format(axis="x", style="sci", scilimits=(0, 3))
+        if metric == "success_rate":
+            ax.set_ylim(-0.02, 1.02)
+        ax.legend(fontsize="small", loc="best")
+        fig.tight_layout()
+        fig.savefig(out, dpi=dpi)
+    finally:
+        plt.close(fig)
+    return drawn

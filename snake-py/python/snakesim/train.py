@@ -1,0 +1,445 @@
+"""Training PPO on snakesim as the paper did (Stable-Baselines3), with evaluations, checkpoints and resume.
+
+A run lives in one directory::
+
+    config.yaml          the resolved configuration (seeds included); reloads equal
+    versions.json        snakesim, stable-baselines3, torch, gymnasium, numpy and Python versions
+    evaluations.csv      timesteps, mean_return, std_return, success_rate, mean_steps_to_goal, wall_time
+    tb/PPO_1/            TensorBoard logs (SB3's, plus eval/*)
+    checkpoints/         model_<T>_steps.zip (+ vecnormalize_<T>_steps.pkl, model_<T>_steps.json)
+    model.zip            the final model (also written on Ctrl-C), vecnormalize.pkl with normalize: true
+
+Evaluations run every ``eval_freq`` total timesteps and once at the end, on ``eval_episodes``
+deterministic episodes in a separate batched env seeded with ``eval_seed``: every evaluation sees the
+same start states, so successive points of a learning curve differ by the policy alone.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from snakesim import agents, runconfig
+
+EVAL_FIELDS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
+EVALUATIONS_FILE = "evaluations.csv"
+VERSIONS_FILE = "versions.json"
+TB_DIR = "tb"
+TB_NAME = "PPO"
+
+
+class RunDirError(ValueError):
+    """A run directory that cannot be used as asked (exists, missing, nothing to resume, ...)."""
+
+
+class TrainingInterrupted(Exception):
+    """Ctrl-C during training; a checkpoint was saved at ``timesteps`` in ``path``."""
+
+    def __init__(self, timesteps: int, path: Path) -> None:
+        super().__init__(f"interrupted at {timesteps} timesteps; saved {path}")
+        self.timesteps = timesteps
+        self.path = path
+
+
+@dataclasses.dataclass
+class TrainResult:
+    run_dir: Path
+    start_timesteps: int
+    timesteps: int
+    seconds: float  # wall time of this session's training, evaluations included
+    eval_seconds: float
+    last_evaluation: dict[str, Any] | None
+
+    @property
+    def timesteps_per_second(self) -> float:
+        return (self.timesteps - self.start_timesteps) / self.seconds if self.seconds > 0 else 0.0
+
+    @property
+    def training_timesteps_per_second(self) -> float:
+        busy = self.seconds - self.eval_seconds
+        return (self.timesteps - self.start_timesteps) / busy if busy > 0 else 0.0
+
+
+def package_versions() -> dict[str, str]:
+    import gymnasium
+    import numpy
+    import stable_baselines3
+    import torch
+
+    import snakesim
+
+    return {
+        "snakesim": snakesim.__version__,
+        "stable_baselines3": stable_baselines3.__version__,
+        "torch": torch.__version__,
+        "gymnasium": gymnasium.__version__,
+        "numpy": numpy.__version__,
+        "python": platform.python_version(),
+    }
+
+
+def default_run_dir(config: Mapping[str, Any]) -> Path:
+    return Path("runs") / f"ppo-{config['arch']}-{config['joints']}-{config['preset']}-seed{config['seed']}"
+
+
+def _format_eval(evaluation: Mapping[str, Any]) -> str:
+    return f"eval R {evaluation['mean_return']:.0f}, success {evaluation['success_rate']:.0%}"
+
+
+def _csv_value(value: Any) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "nan"
+    return repr(value) if isinstance(value, float) else str(value)
+
+
+def read_evaluations(path: str | os.PathLike) -> list[dict[str, float]]:
+    """Rows of an evaluations.csv as floats (``nan`` where no episode reached the goal)."""
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        if reader.fieldnames is None or not set(EVAL_FIELDS) <= set(reader.fieldnames):
+            raise ValueError(
+                f"{os.fspath(path)} is not an evaluations.csv (expected columns {', '.join(EVAL_FIELDS)})"
+            )
+        return [{key: float(row[key]) for key in EVAL_FIELDS} for row in reader]
+
+
+class _Callback:
+    """Builds SB3 callbacks lazily, so that importing this module does not import SB3."""
+
+    @staticmethod
+    def classes():
+        from stable_baselines3.common.callbacks import BaseCallback
+
+        class Periodic(BaseCallback):
+            """Calls ``action(num_timesteps)`` whenever the total timesteps cross a multiple of ``every``."""
+
+            def __init__(self, every: int, action: Callable[[int], None]) -> None:
+                super().__init__()
+                self.every = every
+                self.action = action
+                self.next_at = 0
+
+            def _on_training_start(self) -> None:
+                self.next_at = (self.num_timesteps // self.every + 1) * self.every
+
+            def _on_step(self) -> bool:
+                if self.num_timesteps >= self.next_at:
+                    self.action(self.num_timesteps)
+                    self.next_at = (self.num_timesteps // self.every + 1) * self.every
+                return True
+
+        class Progress(BaseCallback):
+            """A tqdm bar of total timesteps with timesteps/s and the latest evaluation."""
+
+            def __init__(self, total: int, trainer: Trainer) -> None:
+                super().__init__()
+                self.total = total
+                self.trainer = trainer
+                self.bar = None
+                self.shown = 0
+
+            def _on_training_start(self) -> None:
+                from tqdm import tqdm
+
+                self.shown = self.num_timesteps
+                self.bar = tqdm(
+                    total=self.total,
+                    initial=self.shown,
+                    unit="step",
+                    unit_scale=True,
+                    dynamic_ncols=True,
+                    file=sys.stderr,
+                    desc="train",
+                )
+
+            def _on_step(self) -> bool:
+                if self.bar is not None:
+                    self.bar.update(self.num_timesteps - self.shown)
+                    self.shown = self.num_timesteps
+                return True
+
+            def refresh(self) -> None:
+                if self.bar is not None and self.trainer.last_evaluation is not None:
+                    self.bar.set_postfix_str(_format_eval(self.trainer.last_evaluation))
+
+            def close(self) -> None:
+                if self.bar is not None:
+                    self.bar.close()
+                    self.bar = None
+
+        return Periodic, Progress
+
+
+class Trainer:
+    """One training session of a run: a new run, or ``resume=True`` to continue a run directory.
+
+    ``overrides`` are configuration keys (YAML + command line) over the defaults, or over the run's
+    saved config.yaml when resuming (keys that define what is learnt cannot change then).
+    ``callbacks`` are extra SB3 callbacks.
+    """
+
+    def __init__(
+        self,
+        overrides: Mapping[str, Any],
+        run_dir: str | os.PathLike | None = None,
+        *,
+        resume: bool = False,
+        progress: bool | None = None,
+        verbose: int = 0,
+        callbacks: Sequence[Any] = (),
+        log: Callable[[str], None] | None = None,
+    ) -> None:
+        self.resume = resume
+        self.verbose = verbose
+        self.progress = sys.stderr.isatty() if progress is None else progress
+        self.extra_callbacks = list(callbacks)
+        self.log = log or (lambda message: print(message, file=sys.stderr))
+        self.last_evaluation: dict[str, Any] | None = None
+        self.eval_seconds = 0.0
+        self.resume_from: tuple[int, Path] | None = None
+        self.wall_offset = 0.0
+
+        if resume:
+            if run_dir is None:
+                raise RunDirError("--resume needs --run-dir (the run to continue)")
+            self.run_dir = Path(run_dir)
+            config_path = self.run_dir / agents.CONFIG_FILE
+            if not config_path.is_file():
+                raise RunDirError(f"cannot resume {self.run_dir}: no {agents.CONFIG_FILE} there")
+            saved = runconfig.load(config_path)
+            config = runconfig.resolve(runconfig.merge(saved, overrides))
+            for key in runconfig.IDENTITY_KEYS:
+                if config[key] != saved[key]:
+                    raise RunDirError(
+                        f"cannot change {key} when resuming "
+                        f"({self.run_dir} has {saved[key]!r}, got {config[key]!r})"
+                    )
+            found = agents.checkpoints(self.run_dir)
+            if not found:
+                raise RunDirError(f"cannot resume {self.run_dir}: it has no checkpoints")
+            self.resume_from = found[-1]
+            meta = self.resume_from[1].with_suffix(".json")
+            if meta.is_file():
+                self.wall_offset = float(json.loads(meta.read_text()).get("wall_time", 0.0))
+        else:
+            config = runconfig.resolve(overrides)
+            self.run_dir = Path(run_dir) if run_dir is not None else default_run_dir(config)
+            if self.run_dir.exists() and (not self.run_dir.is_dir() or any(self.run_dir.iterdir())):
+                raise RunDirError(
+                    f"run directory {self.run_dir} already exists and is not empty: "
+                    "pass --resume to continue it, or choose another --run-dir"
+                )
+        self.config = config
+
+    # -- files -------------------------------------------------------------------------------------
+    def _prepare_dir(self) -> None:
+        try:
+            (self.run_dir / agents.CHECKPOINT_DIR).mkdir(parents=True, exist_ok=True)
+            runconfig.save(self.config, self.run_dir / agents.CONFIG_FILE)
+            versions_path = self.run_dir / VERSIONS_FILE
+            versions = package_versions()
+            if self.resume and versions_path.is_file():
+                recorded = json.loads(versions_path.read_text())
+                current = {k: v for k, v in versions.items() if recorded.get(k) != v}
+                if current:
+                    recorded.setdefault("resumed_with", []).append(
+                        {"timesteps": self.resume_from[0] if self.resume_from else 0, **current}
+                    )
+                    self.log(f"note: resuming with other versions than the run started with: {current}")
+                versions = recorded
+            versions_path.write_text(json.dumps(versions, indent=2) + "\n")
+            self._prepare_evaluations()
+        except OSError as error:
+            raise RunDirError(
+                f"cannot write to run directory {self.run_dir}: {error.strerror or error}"
+            ) from None
+
+    def _prepare_evaluations(self) -> None:
+        path = self.run_dir / EVALUATIONS_FILE
+        rows: list[list[str]] = []
+        if self.resume and path.is_file():
+            # Evaluations after the checkpoint we resume from (a crash after it) are redone: drop them.
+            with open(path, newline="", encoding="utf-8") as f:
+                reader = csv.reader(f)
+                next(reader, None)
+                limit = self.resume_from[0] if self.resume_from else 0
+                rows = [row for row in reader if row and float(row[0]) <= limit]
+        with open(path, "w", newline="", encoding="utf-8") as f:
+            writer = csv.writer(f)
+            writer.writerow(EVAL_FIELDS)
+            writer.writerows(rows)
+
+    def _append_evaluation(self, row: Mapping[str, Any]) -> None:
+        with open(self.run_dir / EVALUATIONS_FILE, "a", newline="", encoding="utf-8") as f:
+            csv.writer(f).writerow([_csv_value(row[key]) for key in EVAL_FIELDS])
+
+    def wall_time(self) -> float:
+        return self.wall_offset + (time.perf_counter() - self.started)
+
+    # -- model -------------------------------------------------------------------------------------
+    def _make_env(self):
+        from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+        from snakesim.sb3 import SnakeVecEnv
+
+        venv = VecMonitor(SnakeVecEnv(self.config["n_envs"], **runconfig.env_kwargs(self.config)))
+        if not self.config["normalize"]:
+            return venv
+        if self.resume_from is not None:
+            stats = agents.checkpoint_paths(self.run_dir, self.resume_from[0])[1]
+            if stats.is_file():
+                venv = VecNormalize.load(os.fspath(stats), venv)
+                venv.training = True
+                return venv
+            self.log(f"note: {stats} is missing; observation statistics start afresh")
+        return VecNormalize(venv, gamma=self.config["ppo"]["gamma"])
+
+    def _make_model(self, venv):
+        from stable_baselines3 import PPO
+
+        from snakesim.policies import policy_kwargs
+
+        tb = os.fspath(self.run_dir / TB_DIR)
+        if self.resume_from is not None:
+            steps, path = self.resume_from
+            model = PPO.load(
+                path, env=venv, device=self.config["device"], tensorboard_log=tb, verbose=self.verbose
+            )
+            # A fresh env: start new episodes (the saved last observation belongs to the old env), and
+            # seed them apart from the episodes seen before.
+            model._last_obs = None
+            model.set_random_seed(self.config["seed"] + steps)
+            return model
+        return PPO(
+            "MlpPolicy",
+            venv,
+            policy_kwargs=policy_kwargs(self.config["arch"]),
+            seed=self.config["seed"],
+            device=self.config["device"],
+            tensorboard_log=tb,
+            verbose=self.verbose,
+            **self.config["ppo"],
+        )
+
+    def save_checkpoint(self, timesteps: int, reason: str = "periodic") -> Path:
+        model_path, stats_path = agents.checkpoint_paths(self.run_dir, timesteps)
+        self.model.save(model_path)
+        normalizer = self.model.get_vec_normalize_env()
+        if normalizer is not None:
+            normalizer.save(os.fspath(stats_path))
+        meta = {"timesteps": timesteps, "wall_time": self.wall_time(), "reason": reason}
+        model_path.with_suffix(".json").write_text(json.dumps(meta) + "\n")
+        return model_path
+
+    def _save_final(self) -> Path:
+        path = self.run_dir / agents.MODEL_FILE
+        self.model.save(path)
+        normalizer = self.model.get_vec_normalize_env()
+        if normalizer is not None:
+            normalizer.save(os.fspath(self.run_dir / agents.VECNORMALIZE_FILE))
+        return path
+
+    def evaluate(self, timesteps: int) -> dict[str, Any]:
+        start = time.perf_counter()
+        normalizer = self.model.get_vec_normalize_env()
+
+        def act(obs):
+            if normalizer is not None:
+                obs = normalizer.normalize_obs(obs)
+            return self.model.predict(obs, deterministic=True)[0]
+
+        episodes = agents.run_episodes(
+            act, runconfig.env_kwargs(self.config), self.config["eval_episodes"], self.config["eval_seed"]
+        )
+        summary = agents.summarize(episodes)
+        row = {**summary, "timesteps": timesteps, "wall_time": round(self.wall_time(), 3)}
+        self._append_evaluation(row)
+        logger = self.model.logger
+        logger.record("eval/mean_reward", summary["mean_return"])
+        logger.record("eval/std_reward", summary["std_return"])
+        logger.record("eval/success_rate", summary["success_rate"])
+        logger.record("eval/mean_ep_length", summary["mean_length"])
+        if summary["mean_steps_to_goal"] is not None:
+            logger.record("eval/mean_steps_to_goal", summary["mean_steps_to_goal"])
+        logger.record("eval/mean_speed", summary["mean_speed"])
+        logger.dump(timesteps)
+        self.last_evaluation = row
+        self.last_eval_timesteps = timesteps
+        if self.progress_callback is not None:
+            self.progress_callback.refresh()
+        elif self.verbose:
+            self.log(f"{timesteps} timesteps: {_format_eval(row)}")
+        self.eval_seconds += time.perf_counter() - start
+        return row
+
+    # -- the session -------------------------------------------------------------------------------
+    def run(self) -> TrainResult:
+        import torch
+        from stable_baselines3.common.callbacks import CallbackList
+
+        target = self.config["timesteps"]
+        if self.resume_from is not None and self.resume_from[0] >= target:
+            raise RunDirError(
+                f"{self.run_dir} already has {self.resume_from[0]} timesteps (>= timesteps {target}); "
+                "pass a larger --timesteps to train on"
+            )
+        if self.config["torch_threads"] is not None:
+            torch.set_num_threads(self.config["torch_threads"])
+        self._prepare_dir()
+        self.started = time.perf_counter()
+        venv = self._make_env()
+        self.model = self._make_model(venv)
+        start_timesteps = self.model.num_timesteps
+        self.last_eval_timesteps = -1
+        Periodic, Progress = _Callback.classes()
+        callbacks: list[Any] = []
+        self.progress_callback = Progress(target, self) if self.progress else None
+        if self.progress_callback is not None:
+            callbacks.append(self.progress_callback)
+        if self.config["eval_freq"] > 0:
+            callbacks.append(Periodic(self.config["eval_freq"], self.evaluate))
+        if self.config["checkpoint_freq"] > 0:
+            callbacks.append(Periodic(self.config["checkpoint_freq"], self.save_checkpoint))
+        callbacks += self.extra_callbacks
+
+        train_start = time.perf_counter()
+        try:
+            self.model.learn(
+                total_timesteps=target - start_timesteps,
+                callback=CallbackList(callbacks),
+                reset_num_timesteps=self.resume_from is None,
+                tb_log_name=TB_NAME,
+            )
+            if self.last_eval_timesteps != self.model.num_timesteps:
+                self.evaluate(self.model.num_timesteps)
+        except KeyboardInterrupt:
+            if self.progress_callback is not None:
+                self.progress_callback.close()
+            steps = self.model.num_timesteps
+            path = self.save_checkpoint(steps, reason="interrupt")
+            self._save_final()
+            raise TrainingInterrupted(steps, path) from None
+        finally:
+            if self.progress_callback is not None:
+                self.progress_callback.close()
+            venv.close()
+        self.save_checkpoint(self.model.num_timesteps, reason="final")
+        self._save_final()
+        seconds = time.perf_counter() - train_start
+        return TrainResult(
+            run_dir=self.run_dir,
+            start_timesteps=start_timesteps,
+            timesteps=self.model.num_timesteps,
+            seconds=seconds,
+            eval_seconds=self.eval_seconds,
+            last_evaluation=self.last_evaluation,
+        )
