@@ -3,6 +3,7 @@ and its one-line errors. Every run is a few thousand timesteps with small rollou
 
 import csv
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -347,3 +348,24 @@ def test_shipped_configs_parse_as_train_options(repo):
     for path in sorted((repo / "snake-py" / "configs").glob("*.yaml")):
         args = cli.build_parser().parse_args(["train", "--config", str(path)])
         assert runconfig.resolve(cli._train_overrides(args))["timesteps"] == 20_000_000
+
+
+def test_mp4_through_ffmpeg(small_run, tmp_path, capsys, monkeypatch):
+    # A stand-in ffmpeg that counts the raw RGB bytes it is sent (no encoder is needed on this machine).
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    fake = bin_dir / "ffmpeg"
+    fake.write_text(
+        f"#!{sys.executable}\n"
+        "import sys\n"
+        "data = sys.stdin.buffer.read()\n"
+        "size = sys.argv[sys.argv.index('-s') + 1]\n"
+        "open(sys.argv[-1], 'w').write(f'{len(data)} {size}')\n"
+    )
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{bin_dir}:{os.environ['PATH']}")
+    out = tmp_path / "m.mp4"
+    code, stdout, err = run_cli(capsys, "replay", small_run, "--seconds", 0.25, "--fps", 8, "--out", out)
+    assert code == 0, err
+    assert "(3 frames at 8 fps)" in stdout
+    assert out.read_text() == f"{3 * 480 * 480 * 3} 480x480"

@@ -147,7 +147,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     print(
         f"trained {result.timesteps - result.start_timesteps:,} timesteps in {result.seconds:.1f} s: "
         f"{result.timesteps_per_second:.0f} timesteps/s ({result.training_timesteps_per_second:.0f} without "
-        f"evaluations; device {trainer.model.device}, {torch.get_num_threads()} torch threads)"
+        f"evaluations; device {trainer.model.device}, torch threads {torch.get_num_threads()})"
     )
     last = result.last_evaluation
     if last is not None:
@@ -163,8 +163,12 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 # -- evaluate -------------------------------------------------------------------------------------
 def _load_agent(args: argparse.Namespace):
+    import torch
+
     from snakesim.agents import load_agent
 
+    # One thread: a small MLP gains nothing from more, and they would compete with the env's threads.
+    torch.set_num_threads(args.torch_threads)
     return load_agent(args.source, joints=args.joints, preset=args.preset)
 
 
@@ -265,6 +269,7 @@ def _agent_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--preset", choices=PRESETS, help="for a bare .zip: the robot preset (default paper)")
     p.add_argument("--seed", type=_count, default=0, help="seed of the episodes (default 0)")
+    p.add_argument("--torch-threads", type=_positive_int, default=1, help="torch CPU threads (default 1)")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -19,6 +19,11 @@ METRICS = {
     "success_rate": "evaluation success rate",
     "mean_steps_to_goal": "mean steps to goal (successful episodes)",
 }
+TITLES = {
+    "mean_return": "Average evaluation return",
+    "success_rate": "Evaluation success rate",
+    "mean_steps_to_goal": "Mean steps to goal",
+}
 # Keys that do not change what a run learns: runs equal but for these are seeds of one experiment.
 _NOT_THE_EXPERIMENT = ("seed", "eval_seed", "device", "torch_threads", "timesteps", "checkpoint_freq")
 
@@ -150,7 +155,7 @@ def plot_runs(
             drawn.append((label, len(members)))
         ax.set_xlabel("timesteps")
         ax.set_ylabel(METRICS[metric])
-        ax.set_title(title if title is not None else f"Average {METRICS[metric]}")
+        ax.set_title(title if title is not None else TITLES[metric])
         ax.grid(True, alpha=0.3)
         ax.ticklabel_format(axis="x", style="sci", scilimits=(0, 3))
         if metric == "success_rate":

@@ -13,6 +13,7 @@ import math
 import os
 import shutil
 import subprocess
+import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -310,7 +311,8 @@ def write_gif(rec: Recording, out: str | os.PathLike, fps: float = 10.0) -> int:
 
 
 def write_mp4(rec: Recording, out: str | os.PathLike, fps: float = 10.0) -> int:
-    """An H.264 mp4 through the ffmpeg program; returns the number of frames."""
+    """An mp4 through the ffmpeg program (its default mp4 encoder, H.264 where it has one); returns the
+    number of frames."""
     ffmpeg = shutil.which("ffmpeg")
     if ffmpeg is None:
         raise ReplayError(f"cannot write {out}: mp4 needs ffmpeg on PATH; write a .gif instead")
@@ -319,20 +321,29 @@ def write_mp4(rec: Recording, out: str | os.PathLike, fps: float = 10.0) -> int:
     h, w = first.shape[:2]
     command = [
         ffmpeg, "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w}x{h}",
-        "-r", f"{fps}", "-i", "-", "-an", "-vcodec", "libx264", "-pix_fmt", "yuv420p", os.fspath(out),
+        "-r", f"{fps}", "-i", "-", "-an", "-pix_fmt", "yuv420p", os.fspath(out),
     ]  # fmt: skip
-    process = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
     count = 0
-    assert process.stdin is not None
-    try:
-        for frame in itertools.chain([first], frames):
-            process.stdin.write(frame.tobytes())
-            count += 1
-        process.stdin.close()
-    except BrokenPipeError:
-        pass
-    _, err = process.communicate()
-    if process.returncode != 0:
-        message = err.decode(errors="replace").strip().splitlines()
-        raise ReplayError(f"ffmpeg failed writing {out}: {message[-1] if message else process.returncode}")
+    with tempfile.TemporaryFile() as log:  # a file, not a pipe: ffmpeg can never block on its messages
+        process = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=log)
+        assert process.stdin is not None
+        try:
+            for frame in itertools.chain([first], frames):
+                process.stdin.write(frame.tobytes())
+                count += 1
+        except BrokenPipeError:
+            pass  # ffmpeg stopped early: its message says why
+        finally:
+            frames.close()
+            try:
+                process.stdin.close()
+            except BrokenPipeError:
+                pass
+        returncode = process.wait()
+        log.seek(0)
+        message = log.read().decode(errors="replace").strip().splitlines()
+    if returncode != 0:
+        raise ReplayError(
+            f"ffmpeg failed writing {out}: {message[-1] if message else f'exit status {returncode}'}"
+        )
     return count
