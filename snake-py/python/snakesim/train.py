@@ -227,6 +227,11 @@ class Trainer:
             if not found:
                 raise RunDirError(f"cannot resume {self.run_dir}: it has no checkpoints")
             self.resume_from = found[-1]
+            if self.resume_from[0] >= config["timesteps"]:
+                raise RunDirError(
+                    f"{self.run_dir} already has {self.resume_from[0]} timesteps (>= timesteps "
+                    f"{config['timesteps']}); pass a larger --timesteps to train on"
+                )
             meta = self.resume_from[1].with_suffix(".json")
             if meta.is_file():
                 self.wall_offset = float(json.loads(meta.read_text()).get("wall_time", 0.0))
@@ -387,11 +392,6 @@ class Trainer:
         from stable_baselines3.common.callbacks import CallbackList
 
         target = self.config["timesteps"]
-        if self.resume_from is not None and self.resume_from[0] >= target:
-            raise RunDirError(
-                f"{self.run_dir} already has {self.resume_from[0]} timesteps (>= timesteps {target}); "
-                "pass a larger --timesteps to train on"
-            )
         if self.config["torch_threads"] is not None:
             torch.set_num_threads(self.config["torch_threads"])
         self._prepare_dir()
