@@ -196,3 +196,16 @@ def test_actions_are_clipped():
         oa = a.step(np.full(3, 7.0, np.float32))[0]
         ob = b.step(np.full(3, 1.0, np.float32))[0]
     assert oa.tobytes() == ob.tobytes()
+
+
+def test_env_signature_and_config_defaults_agree():
+    # SnakeEnv spells its keywords out for help() and IDEs; config.env_config is what the Rust side gets.
+    import inspect
+
+    from snakesim.config import env_config
+
+    env_params = inspect.signature(snakesim.SnakeEnv.__init__).parameters
+    config_params = inspect.signature(env_config).parameters
+    assert set(env_params) - {"self", "render_mode"} == set(config_params)
+    for name, param in config_params.items():
+        assert env_params[name].default == param.default, name
