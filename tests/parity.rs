@@ -10,7 +10,9 @@ use snakesim_tests::{assert_identical, run_ours, run_reference, Scenario};
 const TEN_SECONDS: u64 = 2400;
 
 fn check(tag: &str, scenarios: Vec<Scenario>) {
-    let tables = run_reference(&scenarios, tag);
+    let Some(tables) = run_reference(&scenarios, tag) else {
+        return;
+    };
     for (s, table) in scenarios.iter().zip(tables) {
         let ours = run_ours(s);
         assert_identical(&s.name, &table.header, &table.rows, &ours);

@@ -37,7 +37,9 @@ fn run_csv_matches_pybullet() {
             Scenario::new(*name, *joints, preset, *start, 2400, "gait")
         })
         .collect();
-    let reference = run_reference(&scenarios, "cli");
+    let Some(reference) = run_reference(&scenarios, "cli") else {
+        return;
+    };
     for ((name, joints, preset, _, extra), table) in cases.iter().zip(reference) {
         let csv = temp(&format!("{name}.csv"));
         let joints = joints.to_string();
