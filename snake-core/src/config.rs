@@ -4,6 +4,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
 
+/// Most joints a snake may have.
+pub const MAX_JOINTS: usize = 512;
+
 /// Every physical parameter of the simulated snake, with the paper's defaults.
 ///
 /// The snake is `joints + 1` cubes in a row along +y (the base first, the tail last), joined by
@@ -124,9 +127,9 @@ impl SnakeConfig {
                 self.joints
             )));
         }
-        if self.joints > 512 {
+        if self.joints > MAX_JOINTS {
             return Err(invalid(format!(
-                "joints must be at most 512, got {}",
+                "joints must be at most {MAX_JOINTS}, got {}",
                 self.joints
             )));
         }

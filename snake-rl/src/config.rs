@@ -1,0 +1,767 @@
+//! The configuration of a training run: one typed structure, the single source of every default
+//! (the paper's Table 1 for PPO), limit and check. The `snakesim` and `snake-cli` commands, the YAML
+//! files in `snake-py/configs/` and the Python package all read it from here.
+//!
+//! A configuration is built from layers, lowest precedence first: the defaults, a YAML file, then
+//! `KEY=VALUE` overrides (`--set ppo.n_steps=256`, values in YAML syntax) and command-line flags.
+//! Mappings merge key by key at every depth. Unknown keys, values of the wrong type and impossible
+//! values are errors whose message starts with the key's path (`ppo.learning_rate: ...`).
+//!
+//! ```
+//! use snake_rl::config::RunConfig;
+//!
+//! let config = RunConfig::from_yaml("joints: 10\nppo: {n_steps: 2048}\n")?;
+//! assert_eq!((config.joints, config.ppo.n_steps, config.ppo.batch_size), (10, 2048, 64));
+//! let error = RunConfig::from_yaml("ppo: {batch_size: 0}").unwrap_err();
+//! assert!(error.to_string().starts_with("ppo.batch_size"));
+//! # Ok::<(), snake_rl::config::ConfigError>(())
+//! ```
+
+use serde::de::{self, Deserializer};
+use serde::{Deserialize, Serialize, Serializer};
+use serde_json::{Map, Value};
+use snake_core::{EnvConfig, Preset};
+
+use crate::nn::Arch;
+
+/// A configuration that cannot be used; the message names the key path and what is wrong.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ConfigError(pub String);
+
+fn err(message: impl Into<String>) -> ConfigError {
+    ConfigError(message.into())
+}
+
+/// Limits of a run's sizes: each keeps a typo from asking for an impossible run.
+pub mod limits {
+    /// Most parallel envs of a run.
+    pub const MAX_ENVS: u64 = 1024;
+    /// Most timesteps of a run (10^12: decades at our speed).
+    pub const MAX_TIMESTEPS: u64 = 1_000_000_000_000;
+    /// Most episodes of one evaluation.
+    pub const MAX_EVAL_EPISODES: u64 = 100_000;
+    /// Most threads (native trainer) or torch threads (SB3 trainer).
+    pub const MAX_THREADS: u64 = 256;
+    /// Most memory the rollout buffer may take, bytes.
+    pub const MAX_ROLLOUT_BYTES: u64 = 4 << 30;
+    /// Most optimisation epochs per rollout.
+    pub const MAX_EPOCHS: u64 = 10_000;
+    /// Largest seed: SB3 and numpy take seeds below 2^32, so both trainers share that range.
+    pub const MAX_SEED: u64 = u32::MAX as u64;
+}
+
+/// Which implementation of PPO trains the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TrainerKind {
+    /// snake-rl, this crate: the whole loop in Rust.
+    #[default]
+    Native,
+    /// Stable-Baselines3 2.x through the `snakesim` Python package.
+    Sb3,
+}
+
+impl TrainerKind {
+    /// The configuration name.
+    pub fn name(self) -> &'static str {
+        match self {
+            TrainerKind::Native => "native",
+            TrainerKind::Sb3 => "sb3",
+        }
+    }
+}
+
+/// A hyperparameter constant over training or decaying linearly to 0 with the remaining progress
+/// (`lin_<initial>`, the notation of rl-baselines3-zoo), as SB3's schedules take it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Schedule {
+    /// The same value throughout.
+    Constant(f64),
+    /// `initial * progress_remaining`, progress_remaining going from 1 to 0.
+    Linear(f64),
+}
+
+impl Schedule {
+    /// The value with `progress_remaining` (1 at the start of training, 0 at the end) left.
+    pub fn at(self, progress_remaining: f64) -> f64 {
+        match self {
+            Schedule::Constant(v) => v,
+            Schedule::Linear(v) => v * progress_remaining,
+        }
+    }
+
+    /// The value at the start of training.
+    pub fn initial(self) -> f64 {
+        self.at(1.0)
+    }
+}
+
+impl Serialize for Schedule {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Schedule::Constant(v) => s.serialize_f64(*v),
+            Schedule::Linear(v) => s.serialize_str(&format!("lin_{v:?}")),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Schedule {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Number(f64),
+            Text(String),
+        }
+        let bad = || {
+            de::Error::custom(
+                "expected a number or lin_<number> (linear decay to 0), e.g. lin_3e-4",
+            )
+        };
+        match Raw::deserialize(d).map_err(|_| bad())? {
+            Raw::Number(v) => Ok(Schedule::Constant(v)),
+            Raw::Text(t) => {
+                let v = t.strip_prefix("lin_").ok_or_else(bad)?;
+                v.parse::<f64>().map(Schedule::Linear).map_err(|_| bad())
+            }
+        }
+    }
+}
+
+/// Integer fields accept YAML/JSON integers and integral floats (`2e7`), nothing else.
+mod integer {
+    use serde::de::{self, Deserializer, Visitor};
+
+    struct Integral;
+
+    impl Visitor<'_> for Integral {
+        type Value = u64;
+
+        fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("a non-negative integer")
+        }
+
+        fn visit_u64<E: de::Error>(self, v: u64) -> Result<u64, E> {
+            Ok(v)
+        }
+
+        fn visit_i64<E: de::Error>(self, v: i64) -> Result<u64, E> {
+            u64::try_from(v)
+                .map_err(|_| E::custom(format!("expected a non-negative integer, got {v}")))
+        }
+
+        fn visit_f64<E: de::Error>(self, v: f64) -> Result<u64, E> {
+            // Below 2^53 every integer is exact in a double.
+            if v.fract() == 0.0 && (0.0..9_007_199_254_740_992.0).contains(&v) {
+                Ok(v as u64)
+            } else {
+                Err(E::custom(format!(
+                    "expected a non-negative integer, got {v}"
+                )))
+            }
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>, T: TryFrom<u64>>(d: D) -> Result<T, D::Error> {
+        let v = d.deserialize_any(Integral)?;
+        T::try_from(v).map_err(|_| de::Error::custom(format!("{v} is too large")))
+    }
+
+    pub mod option {
+        use serde::{Deserialize, Deserializer};
+
+        pub fn deserialize<'de, D: Deserializer<'de>, T: TryFrom<u64>>(
+            d: D,
+        ) -> Result<Option<T>, D::Error> {
+            #[derive(Deserialize)]
+            struct Wrap<T: TryFrom<u64>>(#[serde(deserialize_with = "super::deserialize")] T);
+            Option::<Wrap<T>>::deserialize(d).map(|o| o.map(|Wrap(v)| v))
+        }
+    }
+}
+
+/// PPO's hyperparameters (SB3 2.x's names and meanings). The defaults are the paper's Table 1:
+/// SB3's PPO defaults with `n_steps` 4096 and 10 epochs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PpoConfig {
+    /// Adam's learning rate, a number or `lin_<initial>` (3e-4).
+    pub learning_rate: Schedule,
+    /// Steps per env per rollout (4096).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub n_steps: usize,
+    /// Minibatch size (64).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub batch_size: usize,
+    /// Passes over each rollout (10).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub n_epochs: usize,
+    /// Discount (0.99).
+    pub gamma: f64,
+    /// GAE's lambda (0.95).
+    pub gae_lambda: f64,
+    /// Clip range of the probability ratio, a number or `lin_<initial>` (0.2).
+    pub clip_range: Schedule,
+    /// Clip range of the value around its rollout value (null: no clipping).
+    pub clip_range_vf: Option<f64>,
+    /// Normalise advantages per minibatch (true).
+    pub normalize_advantage: bool,
+    /// Entropy coefficient (0).
+    pub ent_coef: f64,
+    /// Value-loss coefficient (0.5).
+    pub vf_coef: f64,
+    /// Gradient norm clip (0.5).
+    pub max_grad_norm: f64,
+    /// Stop an update's epochs once the KL estimate exceeds 1.5 x this (null: never).
+    pub target_kl: Option<f64>,
+}
+
+impl Default for PpoConfig {
+    fn default() -> Self {
+        PpoConfig {
+            learning_rate: Schedule::Constant(3e-4),
+            n_steps: 4096,
+            batch_size: 64,
+            n_epochs: 10,
+            gamma: 0.99,
+            gae_lambda: 0.95,
+            clip_range: Schedule::Constant(0.2),
+            clip_range_vf: None,
+            normalize_advantage: true,
+            ent_coef: 0.0,
+            vf_coef: 0.5,
+            max_grad_norm: 0.5,
+            target_kl: None,
+        }
+    }
+}
+
+/// Everything that defines a training run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    /// `native` (this crate) or `sb3` (Stable-Baselines3 through Python).
+    pub trainer: TrainerKind,
+    /// Joints N of the snake (5).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub joints: usize,
+    /// `small` (pi/vf [64, 64]) or `large` (shared [128, 128] first).
+    pub arch: Arch,
+    /// The robot's masses: `paper` (every cube 0.06 kg) or `snakebot-gym` (links 1 kg).
+    pub preset: Preset,
+    /// Total env steps to train for (20,000,000).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub timesteps: u64,
+    /// Envs stepped in parallel (16).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub n_envs: usize,
+    /// Seed of the networks, the actions and the training envs (42).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub seed: u64,
+    /// Evaluate every this many timesteps (250,000; 0: only at the end).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub eval_freq: u64,
+    /// Deterministic episodes per evaluation (10).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub eval_episodes: usize,
+    /// Seed of the evaluation episodes (null: seed + 1000).
+    #[serde(deserialize_with = "integer::option::deserialize")]
+    pub eval_seed: Option<u64>,
+    /// Checkpoint every this many timesteps (1,000,000; 0: none besides the final one).
+    #[serde(deserialize_with = "integer::deserialize")]
+    pub checkpoint_freq: u64,
+    /// Normalise observations and rewards as SB3's `VecNormalize` (false, as the paper).
+    pub normalize: bool,
+    /// SB3 trainer: torch device, `auto`, `cpu`, `cuda` or `cuda:N`.
+    pub device: String,
+    /// SB3 trainer: torch CPU threads (null: torch's default).
+    #[serde(deserialize_with = "integer::option::deserialize")]
+    pub torch_threads: Option<usize>,
+    /// Native trainer: threads for the envs and the updates (null: one per core).
+    #[serde(deserialize_with = "integer::option::deserialize")]
+    pub threads: Option<usize>,
+    /// PPO's hyperparameters.
+    pub ppo: PpoConfig,
+    /// More env keywords, as `snakesim.SnakeEnv` takes them (goal, goal_radius, max_episode_steps,
+    /// observation, reward, start, snake, ...); `joints` and `preset` are the top-level keys.
+    pub env: Map<String, Value>,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        RunConfig {
+            trainer: TrainerKind::Native,
+            joints: 5,
+            arch: Arch::Small,
+            preset: Preset::Paper,
+            timesteps: 20_000_000,
+            n_envs: 16,
+            seed: 42,
+            eval_freq: 250_000,
+            eval_episodes: 10,
+            eval_seed: None,
+            checkpoint_freq: 1_000_000,
+            normalize: false,
+            device: "auto".into(),
+            torch_threads: None,
+            threads: None,
+            ppo: PpoConfig::default(),
+            env: Map::new(),
+        }
+    }
+}
+
+/// Keys whose change would make a resumed run learn something else; `--resume` refuses them.
+pub const IDENTITY_KEYS: &[&str] = &[
+    "trainer",
+    "joints",
+    "arch",
+    "preset",
+    "n_envs",
+    "seed",
+    "eval_seed",
+    "normalize",
+    "ppo",
+    "env",
+];
+
+/// Offset of the default evaluation seed from the training seed.
+pub const EVAL_SEED_OFFSET: u64 = 1000;
+
+/// `base` updated by `overlay`: mappings merge key by key at every depth, anything else replaces.
+pub fn merge(base: &mut Value, overlay: &Value) {
+    match (base, overlay) {
+        (Value::Object(b), Value::Object(o)) => {
+            for (k, v) in o {
+                match b.get_mut(k) {
+                    Some(existing) if existing.is_object() && v.is_object() => merge(existing, v),
+                    _ => {
+                        b.insert(k.clone(), v.clone());
+                    }
+                }
+            }
+        }
+        (b, o) => *b = o.clone(),
+    }
+}
+
+/// Parses YAML text into a JSON value (YAML 1.2 scalars: `3e-4` is a number, `yes` a string).
+pub fn parse_yaml(text: &str) -> Result<Value, ConfigError> {
+    let value: Value = serde_norway::from_str(text).map_err(|e| {
+        let at = e
+            .location()
+            .map(|l| format!(" (line {}, column {})", l.line(), l.column()))
+            .unwrap_or_default();
+        let message = e.to_string();
+        let first = message.split(" at line").next().unwrap_or(&message);
+        err(format!("not valid YAML{at}: {first}"))
+    })?;
+    Ok(if value.is_null() {
+        Value::Object(Map::new())
+    } else {
+        value
+    })
+}
+
+/// `KEY=VALUE` overrides (`ppo.n_steps=256`, `env.reward.progress_weight=1`) as one nested mapping;
+/// values are YAML.
+pub fn parse_overrides<S: AsRef<str>>(items: &[S]) -> Result<Value, ConfigError> {
+    let mut out = Value::Object(Map::new());
+    for item in items {
+        let item = item.as_ref();
+        let (key, text) = item.split_once('=').ok_or_else(|| {
+            err(format!(
+                "--set expects KEY=VALUE (e.g. ppo.n_steps=256), got '{item}'"
+            ))
+        })?;
+        let key = key.trim();
+        if key.is_empty() || key.split('.').any(str::is_empty) {
+            return Err(err(format!(
+                "--set: '{key}' is not a key path (e.g. ppo.n_steps)"
+            )));
+        }
+        let value = if text.trim().is_empty() {
+            Value::Null
+        } else {
+            serde_norway::from_str::<Value>(text).map_err(|_| {
+                err(format!(
+                    "--set {key}: cannot parse the value '{text}' as YAML"
+                ))
+            })?
+        };
+        let mut nested = value;
+        for part in key.rsplit('.') {
+            let mut map = Map::new();
+            map.insert(part.to_owned(), nested);
+            nested = Value::Object(map);
+        }
+        merge(&mut out, &nested);
+    }
+    Ok(out)
+}
+
+/// Deserialises `value` as `T`, naming the key path of the first error (prefixed by `prefix`).
+pub fn from_value<T: de::DeserializeOwned>(value: Value, prefix: &str) -> Result<T, ConfigError> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let path = match (prefix.is_empty(), path.as_str()) {
+            (true, ".") => String::new(),
+            (true, p) => p.to_owned(),
+            (false, ".") => prefix.to_owned(),
+            (false, p) => format!("{prefix}.{p}"),
+        };
+        let inner = e.into_inner().to_string();
+        if path.is_empty() {
+            err(inner)
+        } else {
+            err(format!("{path}: {inner}"))
+        }
+    })
+}
+
+/// The env of a run (and of `snakesim.SnakeEnv(**keywords)`): `joints` and `preset` choose the
+/// snake, the `snake` table overrides its parameters, every other key is an [`EnvConfig`] field. Errors
+/// name the key path under `prefix`.
+pub fn env_config(
+    joints: usize,
+    preset: Preset,
+    table: &Map<String, Value>,
+    prefix: &str,
+) -> Result<EnvConfig, ConfigError> {
+    let at = |key: &str| {
+        if prefix.is_empty() {
+            key.to_owned()
+        } else {
+            format!("{prefix}.{key}")
+        }
+    };
+    for key in ["joints", "preset"] {
+        if table.contains_key(key) {
+            return Err(err(format!(
+                "{}: set {key} at the top level, not in the env table",
+                at(key)
+            )));
+        }
+    }
+    let mut object = table.clone();
+    let mut snake = serde_json::to_value(preset.config(joints)).expect("SnakeConfig serialises");
+    if let Some(overrides) = object.remove("snake") {
+        let Value::Object(overrides) = overrides else {
+            return Err(err(format!(
+                "{}: expected a mapping of snake parameters",
+                at("snake")
+            )));
+        };
+        if overrides.contains_key("joints") {
+            return Err(err(format!(
+                "{}: set joints with the joints key, not inside snake",
+                at("snake.joints")
+            )));
+        }
+        merge(&mut snake, &Value::Object(overrides));
+    }
+    object.insert("snake".into(), snake);
+    let config: EnvConfig = from_value(Value::Object(object), prefix)?;
+    config.validate().map_err(|e| with_path(prefix, e))?;
+    Ok(config)
+}
+
+/// snake-core's "field.path must be ..." messages as "prefix.field.path: must be ...".
+fn with_path(prefix: &str, e: snake_core::Error) -> ConfigError {
+    let message = match e {
+        snake_core::Error::InvalidArgument(m) => m,
+        other => other.to_string(),
+    };
+    let is_path = |w: &str| {
+        !w.is_empty()
+            && w.chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "_.[]".contains(c))
+    };
+    match message.split_once(' ') {
+        Some((field, rest)) if is_path(field) => {
+            let path = if prefix.is_empty() {
+                field.to_owned()
+            } else {
+                format!("{prefix}.{field}")
+            };
+            err(format!("{path}: {rest}"))
+        }
+        _ if prefix.is_empty() => err(message),
+        _ => err(format!("{prefix}: {message}")),
+    }
+}
+
+fn check_range<T: PartialOrd + std::fmt::Display + Copy>(
+    key: &str,
+    value: T,
+    low: T,
+    high: T,
+) -> Result<(), ConfigError> {
+    if value < low || value > high {
+        return Err(err(format!(
+            "{key}: must be in [{low}, {high}], got {value}"
+        )));
+    }
+    Ok(())
+}
+
+fn check_real(key: &str, value: f64, positive: bool) -> Result<(), ConfigError> {
+    if !value.is_finite() {
+        return Err(err(format!("{key}: must be finite, got {value}")));
+    }
+    if positive && value <= 0.0 {
+        return Err(err(format!("{key}: must be positive, got {value}")));
+    }
+    Ok(())
+}
+
+fn check_schedule(key: &str, schedule: Schedule) -> Result<(), ConfigError> {
+    check_real(key, schedule.initial(), true)
+}
+
+impl RunConfig {
+    /// A configuration from layers of keys over the defaults (each a JSON mapping), checked.
+    pub fn from_layers(layers: &[Value]) -> Result<Self, ConfigError> {
+        let mut merged = serde_json::to_value(RunConfig::default()).expect("defaults serialise");
+        for layer in layers {
+            if !layer.is_object() {
+                return Err(err(format!(
+                    "a configuration must be a mapping of keys to values, got {}",
+                    kind(layer)
+                )));
+            }
+            merge(&mut merged, layer);
+        }
+        let config: RunConfig = from_value(merged, "")?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// A configuration from YAML text over the defaults, checked.
+    pub fn from_yaml(text: &str) -> Result<Self, ConfigError> {
+        Self::from_layers(&[parse_yaml(text)?])
+    }
+
+    /// Checks every key; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        use limits::*;
+        check_range(
+            "joints",
+            self.joints as u64,
+            1,
+            snake_core::config::MAX_JOINTS as u64,
+        )?;
+        check_range("timesteps", self.timesteps, 1, MAX_TIMESTEPS)?;
+        check_range("n_envs", self.n_envs as u64, 1, MAX_ENVS)?;
+        check_range("seed", self.seed, 0, MAX_SEED)?;
+        if let Some(s) = self.eval_seed {
+            check_range("eval_seed", s, 0, MAX_SEED)?;
+        }
+        check_range(
+            "eval_episodes",
+            self.eval_episodes as u64,
+            1,
+            MAX_EVAL_EPISODES,
+        )?;
+        let device_ok = matches!(self.device.as_str(), "auto" | "cpu" | "cuda")
+            || self
+                .device
+                .strip_prefix("cuda:")
+                .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+        if !device_ok {
+            return Err(err(format!(
+                "device: expected auto, cpu, cuda or cuda:N, got '{}'",
+                self.device
+            )));
+        }
+        if let Some(t) = self.torch_threads {
+            check_range("torch_threads", t as u64, 1, MAX_THREADS)?;
+        }
+        if let Some(t) = self.threads {
+            check_range("threads", t as u64, 1, MAX_THREADS)?;
+        }
+        let p = &self.ppo;
+        check_schedule("ppo.learning_rate", p.learning_rate)?;
+        check_schedule("ppo.clip_range", p.clip_range)?;
+        check_range("ppo.n_steps", p.n_steps as u64, 1, MAX_TIMESTEPS)?;
+        check_range("ppo.n_epochs", p.n_epochs as u64, 1, MAX_EPOCHS)?;
+        let rollout = p.n_steps as u64 * self.n_envs as u64;
+        if rollout < 2 {
+            return Err(err(
+                "ppo.n_steps: n_steps * n_envs must be at least 2 (PPO needs a rollout of 2 steps)",
+            ));
+        }
+        if p.batch_size < 2 || p.batch_size as u64 > rollout {
+            return Err(err(format!(
+                "ppo.batch_size: must be in [2, n_steps * n_envs = {rollout}], got {}",
+                p.batch_size
+            )));
+        }
+        check_range("ppo.gamma", p.gamma, 0.0, 1.0)?;
+        check_range("ppo.gae_lambda", p.gae_lambda, 0.0, 1.0)?;
+        if let Some(c) = p.clip_range_vf {
+            check_real("ppo.clip_range_vf", c, true)?;
+        }
+        check_real("ppo.ent_coef", p.ent_coef, false)?;
+        check_real("ppo.vf_coef", p.vf_coef, false)?;
+        if p.vf_coef < 0.0 {
+            return Err(err(format!("ppo.vf_coef: must be >= 0, got {}", p.vf_coef)));
+        }
+        check_real("ppo.max_grad_norm", p.max_grad_norm, true)?;
+        if let Some(kl) = p.target_kl {
+            check_real("ppo.target_kl", kl, true)?;
+        }
+        let env = self.env_config()?;
+        let row_bytes = 4 * (env.observation_dim() + env.joints() + 8) as u64;
+        if rollout.saturating_mul(row_bytes) > MAX_ROLLOUT_BYTES {
+            return Err(err(format!(
+                "ppo.n_steps: a rollout of n_steps * n_envs = {rollout} steps would take {:.1} GiB \
+                 (at most {} GiB)",
+                (rollout as f64) * row_bytes as f64 / (1u64 << 30) as f64,
+                MAX_ROLLOUT_BYTES >> 30
+            )));
+        }
+        Ok(())
+    }
+
+    /// The env the run trains in.
+    pub fn env_config(&self) -> Result<EnvConfig, ConfigError> {
+        env_config(self.joints, self.preset, &self.env, "env")
+    }
+
+    /// The evaluation seed: `eval_seed`, else `seed + 1000`.
+    pub fn eval_seed(&self) -> u64 {
+        self.eval_seed.unwrap_or(self.seed + EVAL_SEED_OFFSET)
+    }
+
+    /// The configuration as saved with a run: every key, the evaluation seed resolved.
+    pub fn resolved(&self) -> RunConfig {
+        RunConfig {
+            eval_seed: Some(self.eval_seed()),
+            ..self.clone()
+        }
+    }
+
+    /// YAML text, keys in the documented order.
+    pub fn to_yaml(&self) -> String {
+        serde_norway::to_string(self).expect("a run configuration serialises")
+    }
+
+    /// The first identity key (see [`IDENTITY_KEYS`]) on which `self` and `other` differ.
+    pub fn identity_difference(&self, other: &RunConfig) -> Option<(&'static str, Value, Value)> {
+        let a = serde_json::to_value(self).expect("serialises");
+        let b = serde_json::to_value(other).expect("serialises");
+        IDENTITY_KEYS
+            .iter()
+            .find(|k| a[**k] != b[**k])
+            .map(|k| (*k, a[*k].clone(), b[*k].clone()))
+    }
+}
+
+fn kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "a list",
+        Value::Object(_) => "a mapping",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn error(yaml: &str) -> String {
+        RunConfig::from_yaml(yaml).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn defaults_are_table_1() {
+        let c = RunConfig::default();
+        let p = &c.ppo;
+        assert_eq!(p.learning_rate, Schedule::Constant(3e-4));
+        assert_eq!((p.n_steps, p.batch_size, p.n_epochs), (4096, 64, 10));
+        assert_eq!((p.gamma, p.gae_lambda), (0.99, 0.95));
+        assert_eq!(p.clip_range, Schedule::Constant(0.2));
+        assert_eq!((p.ent_coef, p.vf_coef, p.max_grad_norm), (0.0, 0.5, 0.5));
+        assert!(c.validate().is_ok());
+    }
+
+    #[test]
+    fn yaml_round_trips() {
+        let c = RunConfig::from_yaml(
+            "joints: 10\narch: large\npreset: snakebot-gym\ntimesteps: 2e7\nppo: {learning_rate: lin_1e-3, \
+             target_kl: 0.02}\nenv: {goal: [3, -4], reward: {progress_weight: 2}}",
+        )
+        .unwrap();
+        assert_eq!(c.timesteps, 20_000_000);
+        assert_eq!(c.ppo.learning_rate, Schedule::Linear(1e-3));
+        let again = RunConfig::from_yaml(&c.to_yaml()).unwrap();
+        assert_eq!(again, c);
+        assert_eq!(c.env_config().unwrap().goal, (3.0, -4.0));
+    }
+
+    #[test]
+    fn errors_name_the_key_path() {
+        assert!(error("bogus: 1").starts_with("bogus: unknown field `bogus`, expected one of"));
+        assert!(error("ppo: {n_stepz: 1}").starts_with("ppo.n_stepz: unknown field `n_stepz`"));
+        assert!(error("ppo: {learning_rate: 0}").starts_with("ppo.learning_rate: must be positive"));
+        assert!(
+            error("ppo: {learning_rate: abc}").starts_with("ppo.learning_rate: expected a number")
+        );
+        assert!(error("ppo: {n_epochs: 0}").starts_with("ppo.n_epochs: must be in [1,"));
+        assert!(error("ppo: {n_steps: 2.5}")
+            .starts_with("ppo.n_steps: expected a non-negative integer"));
+        assert!(error("ppo: {batch_size: 100000}")
+            .starts_with("ppo.batch_size: must be in [2, n_steps"));
+        assert!(error("n_envs: -1").starts_with("n_envs: expected a non-negative integer"));
+        assert!(error("seed: 4294967296").starts_with("seed: must be in [0, 4294967295]"));
+        assert!(error("arch: huge").starts_with("arch: unknown variant `huge`"));
+        assert!(error("env: {reward: {progress_weight: a}}")
+            .starts_with("env.reward.progress_weight: invalid type"));
+        assert!(
+            error("env: {goal: [true, false]}").starts_with("env.goal[0]: invalid type: boolean")
+        );
+        assert!(error("env: {max_episode_steps: 2.9}")
+            .starts_with("env.max_episode_steps: invalid type: floating point"));
+        assert!(error("env: {joints: 3}").starts_with("env.joints: set joints at the top level"));
+        assert!(error("env: {snake: {link_mass: -1}}")
+            .starts_with("env.snake.link_mass: must be positive"));
+        assert!(
+            error("env: {goal_radius: -1}").starts_with("env.goal_radius: must be finite and >= 0")
+        );
+        assert!(error("- 1").starts_with("a configuration must be a mapping"));
+        assert!(error("ppo: [1").starts_with("not valid YAML (line 2, column 1): did not find"));
+    }
+
+    #[test]
+    fn overrides_nest_and_merge() {
+        let o = parse_overrides(&[
+            "ppo.learning_rate=3e-4",
+            "env.reward.progress_weight=1",
+            "joints=7",
+        ])
+        .unwrap();
+        let base = parse_yaml("env: {reward: {smoothness_weight: 0.5}}").unwrap();
+        let c = RunConfig::from_layers(&[base, o]).unwrap();
+        assert_eq!(c.ppo.learning_rate, Schedule::Constant(3e-4));
+        assert_eq!(c.joints, 7);
+        let r = c.env_config().unwrap().reward;
+        assert_eq!((r.progress_weight, r.smoothness_weight), (1.0, 0.5));
+        assert!(parse_overrides(&["ppo.n_steps"]).is_err());
+        assert!(parse_overrides(&["ppo..n=1"]).is_err());
+    }
+
+    #[test]
+    fn identity_keys_are_found() {
+        let a = RunConfig::default();
+        let mut b = a.clone();
+        b.timesteps = 5;
+        assert_eq!(a.identity_difference(&b), None);
+        b.ppo.gamma = 0.9;
+        assert_eq!(a.identity_difference(&b).unwrap().0, "ppo");
+    }
+}

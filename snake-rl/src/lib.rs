@@ -1,0 +1,12 @@
+//! # snake-rl
+//!
+//! PPO for snakesim in Rust: Stable-Baselines3 2.x's algorithm for a `Box` action space, without
+//! Python in the training loop.
+#![deny(missing_docs)]
+
+pub mod buffer;
+pub mod config;
+pub mod nn;
+pub mod normalize;
+pub mod optim;
+pub mod ppo;

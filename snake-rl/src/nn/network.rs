@@ -1,0 +1,426 @@
+//! The paper's actor-critic networks over one flat parameter buffer, laid out and named as
+//! Stable-Baselines3's `ActorCriticPolicy` names its tensors, so that weights move between the two
+//! one to one.
+//!
+//! - [`Arch::Small`] (PPO-small, SB3's default `MlpPolicy`): separate policy and value networks of
+//!   two tanh layers of 64; `log_std`, `mlp_extractor.{policy,value}_net.{0,2}`, `action_net`,
+//!   `value_net`.
+//! - [`Arch::Large`] (PPO-large, the paper's `net_arch=[128, 128, dict(pi=[64, 64], vf=[64, 64])]`):
+//!   a shared trunk of two tanh layers of 128 (`features_extractor.shared_net.{0,2}`, as snakesim's
+//!   SB3 features extractor names it), then the same [64, 64] heads.
+
+use serde::{Deserialize, Serialize};
+
+use super::activation::{tanh_backward_in_place, tanh_in_place};
+use super::dense::Dense;
+
+/// Which of the paper's two networks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Arch {
+    /// Separate policy and value networks of [64, 64] (tanh).
+    #[default]
+    Small,
+    /// A shared [128, 128] tanh trunk, then policy and value heads of [64, 64].
+    Large,
+}
+
+impl Arch {
+    /// Every architecture, in the order of their names in [`Arch::NAMES`].
+    pub const ALL: [Arch; 2] = [Arch::Small, Arch::Large];
+    /// The configuration names.
+    pub const NAMES: [&'static str; 2] = ["small", "large"];
+
+    /// The configuration name (`small` or `large`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Arch::Small => "small",
+            Arch::Large => "large",
+        }
+    }
+
+    /// Widths of the shared trunk's tanh layers.
+    pub fn shared_widths(self) -> &'static [usize] {
+        match self {
+            Arch::Small => &[],
+            Arch::Large => &[128, 128],
+        }
+    }
+
+    /// Widths of each head's tanh layers (policy and value alike).
+    pub fn head_widths(self) -> &'static [usize] {
+        &[64, 64]
+    }
+}
+
+impl std::fmt::Display for Arch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Arch {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Arch::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| format!("unknown arch '{s}' (expected one of: small, large)"))
+    }
+}
+
+/// How a layer's weight is initialised (SB3's orthogonal init): the gain of its orthogonal matrix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Role {
+    /// A hidden tanh layer (gain sqrt(2)).
+    Hidden,
+    /// The policy head's output, the action means (gain 0.01).
+    ActionMean,
+    /// The value head's output (gain 1).
+    Value,
+}
+
+impl Role {
+    /// SB3's `ortho_init` gain for this role.
+    pub fn gain(self) -> f64 {
+        match self {
+            Role::Hidden => std::f64::consts::SQRT_2,
+            Role::ActionMean => 0.01,
+            Role::Value => 1.0,
+        }
+    }
+}
+
+/// One named tensor of the parameter buffer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tensor {
+    /// SB3's `state_dict` name.
+    pub name: String,
+    /// Its shape (PyTorch's: `[outputs, inputs]` for a weight).
+    pub shape: Vec<usize>,
+    /// Offset in the flat buffer.
+    pub offset: usize,
+}
+
+impl Tensor {
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        self.shape.iter().product()
+    }
+
+    /// Whether it holds no value.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The network's structure: where each layer lives in the flat parameter buffer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActorCritic {
+    arch: Arch,
+    obs_dim: usize,
+    act_dim: usize,
+    shared: Vec<Dense>,
+    pi: Vec<Dense>,
+    vf: Vec<Dense>,
+    action: Dense,
+    value: Dense,
+    log_std: usize,
+    len: usize,
+}
+
+/// A chain of tanh layers starting at `offset`; returns the layers and the offset past them.
+fn chain(mut offset: usize, mut width: usize, widths: &[usize]) -> (Vec<Dense>, usize, usize) {
+    let mut layers = Vec::with_capacity(widths.len());
+    for &w in widths {
+        let d = Dense::at(offset, width, w);
+        offset = d.end();
+        width = w;
+        layers.push(d);
+    }
+    (layers, offset, width)
+}
+
+impl ActorCritic {
+    /// The network `arch` for observations of `obs_dim` values and `act_dim` actions.
+    pub fn new(arch: Arch, obs_dim: usize, act_dim: usize) -> Self {
+        // log_std first, as SB3's state_dict lists it.
+        let log_std = 0;
+        let (shared, offset, trunk) = chain(act_dim, obs_dim, arch.shared_widths());
+        let (pi, offset, pi_width) = chain(offset, trunk, arch.head_widths());
+        let (vf, offset, vf_width) = chain(offset, trunk, arch.head_widths());
+        let action = Dense::at(offset, pi_width, act_dim);
+        let value = Dense::at(action.end(), vf_width, 1);
+        ActorCritic {
+            arch,
+            obs_dim,
+            act_dim,
+            shared,
+            pi,
+            vf,
+            action,
+            value,
+            log_std,
+            len: value.end(),
+        }
+    }
+
+    /// The architecture.
+    pub fn arch(&self) -> Arch {
+        self.arch
+    }
+
+    /// Observation length.
+    pub fn obs_dim(&self) -> usize {
+        self.obs_dim
+    }
+
+    /// Action length.
+    pub fn act_dim(&self) -> usize {
+        self.act_dim
+    }
+
+    /// Number of parameters (the flat buffer's length).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the network has no parameters (never).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Offset of the `act_dim` log standard deviations.
+    pub fn log_std_offset(&self) -> usize {
+        self.log_std
+    }
+
+    /// Every dense layer with its initialisation role, in buffer order.
+    pub fn layers(&self) -> Vec<(Dense, Role)> {
+        let hidden = self.shared.iter().chain(&self.pi).chain(&self.vf);
+        hidden
+            .map(|d| (*d, Role::Hidden))
+            .chain([(self.action, Role::ActionMean), (self.value, Role::Value)])
+            .collect()
+    }
+
+    /// The named tensors, in buffer order, with SB3's `state_dict` names.
+    pub fn tensors(&self) -> Vec<Tensor> {
+        let mut out = vec![Tensor {
+            name: "log_std".into(),
+            shape: vec![self.act_dim],
+            offset: self.log_std,
+        }];
+        let mut push = |prefix: String, d: &Dense| {
+            out.push(Tensor {
+                name: format!("{prefix}.weight"),
+                shape: vec![d.outputs, d.inputs],
+                offset: d.weight,
+            });
+            out.push(Tensor {
+                name: format!("{prefix}.bias"),
+                shape: vec![d.outputs],
+                offset: d.bias,
+            });
+        };
+        // nn.Sequential(Linear, Tanh, Linear, Tanh): the linear layers are entries 0, 2, ...
+        for (k, d) in self.shared.iter().enumerate() {
+            push(format!("features_extractor.shared_net.{}", 2 * k), d);
+        }
+        for (k, d) in self.pi.iter().enumerate() {
+            push(format!("mlp_extractor.policy_net.{}", 2 * k), d);
+        }
+        for (k, d) in self.vf.iter().enumerate() {
+            push(format!("mlp_extractor.value_net.{}", 2 * k), d);
+        }
+        push("action_net".into(), &self.action);
+        push("value_net".into(), &self.value);
+        out
+    }
+
+    /// Buffers for a forward and backward pass of up to `rows` rows.
+    pub fn workspace(&self, rows: usize) -> Workspace {
+        let mut ws = Workspace::default();
+        ws.ensure(self, rows);
+        ws
+    }
+
+    fn widest(&self) -> usize {
+        self.shared
+            .iter()
+            .chain(&self.pi)
+            .chain(&self.vf)
+            .map(|d| d.outputs.max(d.inputs))
+            .chain([self.obs_dim, self.act_dim])
+            .max()
+            .unwrap_or(1)
+    }
+
+    /// Action means and values of `rows` observations (`rows x obs_dim`); results in `ws.mean`
+    /// (`rows x act_dim`) and `ws.value` (`rows`), hidden activations kept for [`Self::backward`].
+    pub fn forward(&self, params: &[f32], obs: &[f32], rows: usize, ws: &mut Workspace) {
+        debug_assert_eq!(params.len(), self.len);
+        ws.ensure(self, rows);
+        ws.rows = rows;
+        let trunk = tanh_chain(&self.shared, &mut ws.shared, params, obs, rows);
+        let pi = tanh_chain(&self.pi, &mut ws.pi, params, trunk, rows);
+        self.action.forward(params, pi, rows, &mut ws.mean);
+        let vf = tanh_chain(&self.vf, &mut ws.vf, params, trunk, rows);
+        self.value.forward(params, vf, rows, &mut ws.value);
+    }
+
+    /// Values only (the value network), into `ws.value`.
+    pub fn forward_value(&self, params: &[f32], obs: &[f32], rows: usize, ws: &mut Workspace) {
+        ws.ensure(self, rows);
+        ws.rows = rows;
+        let trunk = tanh_chain(&self.shared, &mut ws.shared, params, obs, rows);
+        let vf = tanh_chain(&self.vf, &mut ws.vf, params, trunk, rows);
+        self.value.forward(params, vf, rows, &mut ws.value);
+    }
+
+    /// Gradients of every weight and bias (not `log_std`, which the loss owns) from dL/d(mean)
+    /// (`ws.d_mean`, `rows x act_dim`) and dL/d(value) (`ws.d_value`), after [`Self::forward`] on
+    /// the same `obs`. Overwrites those entries of `grads`.
+    pub fn backward(&self, params: &[f32], obs: &[f32], ws: &mut Workspace, grads: &mut [f32]) {
+        let rows = ws.rows;
+        let Workspace {
+            shared,
+            pi,
+            vf,
+            d_mean,
+            d_value,
+            d_a,
+            d_b,
+            d_trunk,
+            ..
+        } = ws;
+        let trunk: &[f32] = shared.last().map_or(obs, |v| v.as_slice());
+        let has_trunk = !self.shared.is_empty();
+
+        // Each head: its output layer, then its tanh layers from the last to the first.
+        let heads = [
+            (&self.pi, &*pi, self.action, &*d_mean),
+            (&self.vf, &*vf, self.value, &*d_value),
+        ];
+        for (k, (layers, acts, out, d_out)) in heads.into_iter().enumerate() {
+            let last = acts.last().expect("heads have layers");
+            out.backward(params, last, d_out, rows, grads, Some(d_a));
+            for i in (0..layers.len()).rev() {
+                let d = layers[i];
+                tanh_backward_in_place(&mut d_a[..rows * d.outputs], &acts[i]);
+                let input = if i == 0 { trunk } else { &acts[i - 1] };
+                if i > 0 || has_trunk {
+                    d.backward(params, input, d_a, rows, grads, Some(d_b));
+                    std::mem::swap(d_a, d_b);
+                } else {
+                    d.backward(params, input, d_a, rows, grads, None);
+                }
+            }
+            if has_trunk {
+                // d_a now holds dL/d(trunk) from this head; the trunk gets the sum of both heads'.
+                let n = rows * self.shared.last().map_or(0, |d| d.outputs);
+                if k == 0 {
+                    d_trunk[..n].copy_from_slice(&d_a[..n]);
+                } else {
+                    for (t, g) in d_trunk[..n].iter_mut().zip(&d_a[..n]) {
+                        *t += g;
+                    }
+                }
+            }
+        }
+        if has_trunk {
+            let n = rows * self.shared.last().map_or(0, |d| d.outputs);
+            d_a[..n].copy_from_slice(&d_trunk[..n]);
+            for i in (0..self.shared.len()).rev() {
+                let d = self.shared[i];
+                tanh_backward_in_place(&mut d_a[..rows * d.outputs], &shared[i]);
+                if i > 0 {
+                    d.backward(params, &shared[i - 1], d_a, rows, grads, Some(d_b));
+                    std::mem::swap(d_a, d_b);
+                } else {
+                    d.backward(params, obs, d_a, rows, grads, None);
+                }
+            }
+        }
+    }
+}
+
+/// Runs `rows` rows of `input` through a chain of dense + tanh layers, each writing its output into
+/// its buffer in `outputs`; returns the last output (`input` itself for an empty chain).
+fn tanh_chain<'a>(
+    layers: &[Dense],
+    outputs: &'a mut [Vec<f32>],
+    params: &[f32],
+    input: &'a [f32],
+    rows: usize,
+) -> &'a [f32] {
+    let mut input = input;
+    for (d, out) in layers.iter().zip(outputs.iter_mut()) {
+        d.forward(params, input, rows, out);
+        tanh_in_place(&mut out[..rows * d.outputs]);
+        input = out;
+    }
+    input
+}
+
+/// Buffers of one forward/backward pass; grows to the rows asked for and is reused.
+#[derive(Debug, Clone, Default)]
+pub struct Workspace {
+    rows: usize,
+    capacity: usize,
+    shared: Vec<Vec<f32>>,
+    pi: Vec<Vec<f32>>,
+    vf: Vec<Vec<f32>>,
+    /// Action means of the last forward pass (`rows x act_dim`).
+    pub mean: Vec<f32>,
+    /// Values of the last forward pass (`rows`).
+    pub value: Vec<f32>,
+    /// dL/d(mean), filled by the loss before [`ActorCritic::backward`].
+    pub d_mean: Vec<f32>,
+    /// dL/d(value), filled by the loss before [`ActorCritic::backward`].
+    pub d_value: Vec<f32>,
+    d_a: Vec<f32>,
+    d_b: Vec<f32>,
+    d_trunk: Vec<f32>,
+}
+
+impl Workspace {
+    fn ensure(&mut self, net: &ActorCritic, rows: usize) {
+        let fits = |v: &Vec<Vec<f32>>, layers: &[Dense]| {
+            v.len() == layers.len()
+                && v.iter()
+                    .zip(layers)
+                    .all(|(b, d)| b.len() >= rows * d.outputs)
+        };
+        if rows <= self.capacity
+            && fits(&self.shared, &net.shared)
+            && fits(&self.pi, &net.pi)
+            && fits(&self.vf, &net.vf)
+            && self.mean.len() >= rows * net.act_dim
+        {
+            return;
+        }
+        let rows = rows.max(self.capacity);
+        let alloc = |layers: &[Dense]| -> Vec<Vec<f32>> {
+            layers.iter().map(|d| vec![0.0; rows * d.outputs]).collect()
+        };
+        self.shared = alloc(&net.shared);
+        self.pi = alloc(&net.pi);
+        self.vf = alloc(&net.vf);
+        self.mean = vec![0.0; rows * net.act_dim];
+        self.value = vec![0.0; rows];
+        self.d_mean = vec![0.0; rows * net.act_dim];
+        self.d_value = vec![0.0; rows];
+        let wide = rows * net.widest();
+        self.d_a = vec![0.0; wide];
+        self.d_b = vec![0.0; wide];
+        self.d_trunk = vec![0.0; wide];
+        self.capacity = rows;
+    }
+
+    /// Rows of the last forward pass.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+}

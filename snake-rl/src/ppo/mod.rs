@@ -1,0 +1,8 @@
+//! Proximal Policy Optimization as Stable-Baselines3 2.x runs it.
+
+pub mod act;
+pub mod loss;
+pub mod update;
+
+pub use loss::{LossScratch, LossSettings, LossStats, Minibatch};
+pub use update::{Learner, NonFinite, UpdateSettings, UpdateStats};
