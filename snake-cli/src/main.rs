@@ -4,11 +4,12 @@ mod bench;
 mod env_run;
 mod plot;
 mod run;
+mod train;
 mod trajectory;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// snakesim: the "Simulating Snakes" robot on Bullet, bit for bit as pybullet 3.2.7 moves it.
 #[derive(Parser)]
@@ -26,14 +27,21 @@ enum Command {
     Env(env_run::EnvArgs),
     /// Measure physics steps per second (and pybullet's, when its reference environment exists).
     Bench(bench::BenchArgs),
+    /// Train PPO with the native trainer (the paper's settings by default); no Python needed.
+    Train(train::TrainArgs),
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let command = Cli::command().mut_subcommand("train", train::with_default_help);
+    let cli = match Cli::from_arg_matches(&command.get_matches()) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Env(args) => env_run::run(&args),
         Command::Bench(args) => bench::bench(&args),
+        Command::Train(args) => train::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

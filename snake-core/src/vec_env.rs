@@ -56,8 +56,8 @@ pub struct VecSnakeEnv {
 enum Parallelism {
     /// rayon's global pool.
     Global,
-    /// A dedicated pool.
-    Pool(rayon::ThreadPool),
+    /// A dedicated pool, possibly shared with the caller (e.g. a trainer's).
+    Pool(std::sync::Arc<rayon::ThreadPool>),
     /// No threads: one env after the other.
     Sequential,
 }
@@ -163,15 +163,22 @@ impl VecSnakeEnv {
         self.parallelism = match threads {
             0 => return Err(invalid("threads must be at least 1, got 0")),
             1 => Parallelism::Sequential,
-            _ => Parallelism::Pool(
+            _ => Parallelism::Pool(std::sync::Arc::new(
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
                     .thread_name(|i| format!("snakesim-env-{i}"))
                     .build()
                     .map_err(|e| invalid(format!("could not start {threads} threads: {e}")))?,
-            ),
+            )),
         };
         Ok(self)
+    }
+
+    /// Steps on `pool`, which the caller may use for its own work between steps (a trainer's
+    /// updates), so that one set of threads serves both.
+    pub fn with_pool(mut self, pool: std::sync::Arc<rayon::ThreadPool>) -> Self {
+        self.parallelism = Parallelism::Pool(pool);
+        self
     }
 
     /// Number of envs `M`.

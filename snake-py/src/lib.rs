@@ -8,7 +8,9 @@ use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use snake_core::env::{EnvConfig, Info, ResetOptions, SnakeEnv};
-use snake_core::{Preset, StartPose, VecSnakeEnv};
+use snake_core::{StartPose, VecSnakeEnv};
+
+mod native;
 
 /// snake-core's errors as Python exceptions: bad input is a ValueError, a failing engine a RuntimeError.
 fn to_py(error: snake_core::Error) -> PyErr {
@@ -18,44 +20,25 @@ fn to_py(error: snake_core::Error) -> PyErr {
     }
 }
 
-/// Builds an [`EnvConfig`] from the JSON the Python layer writes: `joints` and `preset` choose the
-/// snake, `snake` overrides its parameters, every other key is an `EnvConfig` field.
-fn parse_config(json: &str) -> PyResult<EnvConfig> {
-    let bad = |m: String| PyValueError::new_err(m);
-    let mut object: serde_json::Map<String, serde_json::Value> =
-        serde_json::from_str(json).map_err(|e| bad(format!("invalid env configuration: {e}")))?;
-    let joints = object
-        .remove("joints")
-        .map(|v| {
-            v.as_u64()
-                .ok_or_else(|| bad(format!("joints must be a positive int, got {v}")))
-        })
-        .transpose()?
-        .unwrap_or(5) as usize;
-    let preset: Preset = match object.remove("preset") {
-        None => Preset::Paper,
-        Some(serde_json::Value::String(s)) => s.parse().map_err(to_py)?,
-        Some(v) => return Err(bad(format!("preset must be a string, got {v}"))),
-    };
-    let mut snake = serde_json::to_value(preset.config(joints)).expect("SnakeConfig serialises");
-    if let Some(overrides) = object.remove("snake") {
-        let overrides = overrides
-            .as_object()
-            .ok_or_else(|| bad("snake must be a mapping of parameters".into()))?;
-        for (key, value) in overrides {
-            if key == "joints" {
-                return Err(bad(
-                    "set joints with the joints argument, not inside snake".into()
-                ));
-            }
-            snake[key] = value.clone();
-        }
+/// A configuration error as Python expects it: a value of the wrong type is a TypeError, anything
+/// else a ValueError; the message starts with the key path.
+fn config_error(e: snake_rl::config::ConfigError) -> PyErr {
+    if e.0.contains("invalid type:") {
+        PyTypeError::new_err(e.0)
+    } else {
+        PyValueError::new_err(e.0)
     }
-    object.insert("snake".into(), snake);
-    let config: EnvConfig = serde_json::from_value(serde_json::Value::Object(object))
-        .map_err(|e| bad(format!("invalid env argument: {e}")))?;
-    config.validate().map_err(to_py)?;
-    Ok(config)
+}
+
+/// Builds an [`EnvConfig`] from the keywords of `snakesim.SnakeEnv` as JSON (`joints`, `preset`,
+/// `snake` overrides, every other key an `EnvConfig` field), checked by snake-rl's configuration.
+fn parse_config(json: &str) -> PyResult<EnvConfig> {
+    let value: serde_json::Value = serde_json::from_str(json)
+        .map_err(|e| PyValueError::new_err(format!("invalid env keywords: {e}")))?;
+    let serde_json::Value::Object(keywords) = value else {
+        return Err(PyTypeError::new_err("env keywords must be a mapping"));
+    };
+    snake_rl::config::env_from_keywords(&keywords).map_err(config_error)
 }
 
 fn info_dict<'py>(py: Python<'py>, info: &Info) -> PyResult<Bound<'py, PyDict>> {
@@ -348,5 +331,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<Env>()?;
     m.add_class::<VecEnv>()?;
+    native::register(m)?;
     Ok(())
 }

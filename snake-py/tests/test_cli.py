@@ -1,5 +1,6 @@
-"""The `snakesim` command end to end on tiny runs: train (both networks), resume, evaluate, plot, replay,
-and its one-line errors. Every run is a few thousand timesteps with small rollouts, so this takes seconds."""
+"""The `snakesim` command end to end on tiny runs with the Stable-Baselines3 trainer: train (both
+networks), resume, evaluate, plot, replay, and its one-line errors (the native trainer's runs:
+test_native.py). Every run is a few thousand timesteps with small rollouts, so this takes seconds."""
 
 import csv
 import json
@@ -17,6 +18,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 # Rollouts of 4 envs x 128 steps, episodes of at most 200 steps, 2 evaluation episodes.
 TINY = {
+    "trainer": "sb3",
     "joints": 3,
     "n_envs": 4,
     "timesteps": 1024,
@@ -253,12 +255,12 @@ def bad_inputs(tmp_path, small_run):
         "malformed yaml": (
             ["train", "--config", malformed, "--run-dir", tmp_path / "r1"],
             1,
-            "is not valid YAML",
+            "bad.yaml: not valid YAML (line 2",
         ),
         "unknown yaml key": (
             ["train", "--config", unknown_key, "--run-dir", tmp_path / "r2"],
             1,
-            "unknown key: learning_rate",
+            "learning_rate: unknown field `learning_rate`",
         ),
         "missing yaml": (["train", "--config", tmp_path / "none.yaml"], 1, "does not exist"),
         "existing run dir": (["train", "--run-dir", small_run], 1, "already exists and is not empty"),
@@ -286,7 +288,7 @@ def bad_inputs(tmp_path, small_run):
         "bad set": (
             ["train", "--set", "ppo.gamma=2", "--run-dir", tmp_path / "r3"],
             1,
-            "ppo.gamma must be in",
+            "ppo.gamma: must be in [0, 1], got 2",
         ),
     }
 

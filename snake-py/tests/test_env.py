@@ -137,16 +137,25 @@ def test_render_rgb_array_shows_snake_and_goal():
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
-        ({"joints": 0}, ValueError, "joints must be at least 1"),
-        ({"joints": 2.5}, TypeError, "joints must be an int"),
-        ({"preset": "heavy"}, ValueError, "unknown preset"),
-        ({"observation": "pixels"}, ValueError, "unknown observation"),
-        ({"goal": (float("nan"), 0.0)}, ValueError, "goal must be finite"),
-        ({"goal_radius": -1.0}, ValueError, "goal_radius"),
-        ({"max_episode_steps": 0}, ValueError, "max_episode_steps"),
-        ({"snake": {"wings": 2}}, ValueError, "wings"),
-        ({"start": {"x": [1.0, 0.0]}}, ValueError, "start.x"),
-        ({"reward": {"bonus": 1}}, ValueError, "bonus"),
+        ({"joints": 0}, ValueError, r"^joints: must be in \[1, 512\], got 0"),
+        ({"joints": 2.5}, TypeError, "^joints: invalid type: floating point `2.5`"),
+        ({"preset": "heavy"}, ValueError, "^preset: unknown variant `heavy`"),
+        ({"observation": "pixels"}, ValueError, "^observation: unknown variant `pixels`"),
+        ({"goal": (float("nan"), 0.0)}, ValueError, r"^goal\[0\]: must be finite"),
+        ({"goal_radius": -1.0}, ValueError, "^goal_radius: must be finite and >= 0"),
+        ({"max_episode_steps": 0}, ValueError, "^max_episode_steps: must be at least 1"),
+        ({"snake": {"wings": 2}}, ValueError, "^snake.wings: unknown field `wings`"),
+        ({"start": {"x": [1.0, 0.0]}}, ValueError, r"^start.x: must have low <= high"),
+        ({"reward": {"bonus": 1}}, ValueError, "^reward.bonus: unknown field `bonus`"),
+        # Values are not coerced: the wrong type is a TypeError naming the keyword (issue 12, item 7).
+        ({"max_episode_steps": 2.9}, TypeError, "^max_episode_steps: invalid type: floating point `2.9`"),
+        ({"action_scale": "2"}, TypeError, '^action_scale: invalid type: string "2"'),
+        ({"goal": (True, False)}, TypeError, r"^goal\[0\]: invalid type: boolean `true`"),
+        (
+            {"reward": {"progress_weight": "a"}},
+            TypeError,
+            '^reward.progress_weight: invalid type: string "a"',
+        ),
         ({"render_mode": "human"}, ValueError, "render_mode"),
     ],
 )
@@ -198,14 +207,21 @@ def test_actions_are_clipped():
     assert oa.tobytes() == ob.tobytes()
 
 
-def test_env_signature_and_config_defaults_agree():
-    # SnakeEnv spells its keywords out for help() and IDEs; config.env_config is what the Rust side gets.
+def test_env_signature_defaults_are_the_rust_defaults():
+    # SnakeEnv spells its keywords out for help() and IDEs; their defaults must be snake-rl's, the one
+    # source of them, read here straight from the compiled core.
     import inspect
+    import json
 
-    from snakesim.config import env_config
+    from snakesim import _core
 
-    env_params = inspect.signature(snakesim.SnakeEnv.__init__).parameters
-    config_params = inspect.signature(env_config).parameters
-    assert set(env_params) - {"self", "render_mode"} == set(config_params)
-    for name, param in config_params.items():
-        assert env_params[name].default == param.default, name
+    rust = json.loads(_core.env_keyword_defaults())
+    params = inspect.signature(snakesim.SnakeEnv.__init__).parameters
+    assert set(params) - {"self", "render_mode"} == set(rust) | {"start", "reward", "snake"}
+    for name, value in rust.items():
+        if name in ("start", "reward"):
+            continue  # tables: None means the defaults
+        default = params[name].default
+        assert (list(default) if isinstance(default, tuple) else default) == value, name
+    for name in ("start", "reward", "snake"):
+        assert params[name].default is None

@@ -18,10 +18,14 @@ def test_defaults_are_the_papers_table_1():
         "gamma": 0.99,
         "gae_lambda": 0.95,
         "clip_range": 0.2,
+        "clip_range_vf": None,
+        "normalize_advantage": True,
         "ent_coef": 0.0,
         "vf_coef": 0.5,
         "max_grad_norm": 0.5,
+        "target_kl": None,
     }
+    assert config["trainer"] == "native"
     assert (config["timesteps"], config["n_envs"], config["seed"]) == (20_000_000, 16, 42)
     assert (config["eval_freq"], config["eval_episodes"], config["checkpoint_freq"]) == (
         250_000,
@@ -39,7 +43,7 @@ def test_shipped_configs_are_the_papers_four_runs():
         arch, joints = path.stem.split("-")[1:]
         assert config["arch"] == arch and config["joints"] == int(joints), path.name
         assert config["preset"] == "snakebot-gym" and config["timesteps"] == 20_000_000
-        assert config["seed"] == 42 and config["ppo"] == runconfig.PPO_DEFAULTS
+        assert config["seed"] == 42 and config["ppo"] == runconfig.DEFAULTS["ppo"]
         # The published ppo_10_arch_shared agent records n_envs 32; the others the code's default 16.
         assert config["n_envs"] == (32 if path.stem == "paper-large-10" else 16)
 
@@ -83,17 +87,28 @@ def test_precedence_defaults_yaml_then_flags(tmp_path):
 @pytest.mark.parametrize(
     ("config", "match"),
     [
-        ({"arch": "huge"}, "unknown arch 'huge'"),
-        ({"joints": 0}, "joints must be at least 1"),
-        ({"joints": "five"}, "joints must be an integer"),
-        ({"bogus": 1}, "unknown key: bogus"),
-        ({"ppo": {"lr": 1}}, "unknown key in ppo: lr"),
-        ({"ppo": {"gamma": 1.5}}, r"ppo.gamma must be in \[0.0, 1.0\]"),
-        ({"env": {"goall": [0, 1]}}, "unknown key in env: goall"),
-        ({"env": {"snake": {"mass": 1}}}, "unknown field `mass`"),
-        ({"env": {"observation": "full"}}, "unknown observation"),
-        ({"device": "tpu"}, "device must be"),
-        ({"normalize": "yes"}, "normalize must be true or false"),
+        ({"arch": "huge"}, "^arch: unknown variant `huge`"),
+        ({"trainer": "jax"}, "^trainer: unknown variant `jax`"),
+        ({"joints": 0}, r"^joints: must be in \[1, 512\], got 0"),
+        ({"joints": "five"}, '^joints: invalid type: string "five", expected a non-negative integer'),
+        ({"joints": 2.5}, "^joints: invalid type: floating point `2.5`, expected a non-negative integer"),
+        ({"bogus": 1}, "^bogus: unknown field `bogus`"),
+        ({"ppo": {"lr": 1}}, "^ppo.lr: unknown field `lr`"),
+        ({"ppo": {"gamma": 1.5}}, r"^ppo.gamma: must be in \[0, 1\], got 1.5"),
+        ({"ppo": {"learning_rate": 0}}, "^ppo.learning_rate: must be positive, got 0"),
+        ({"ppo": {"n_epochs": 0}}, r"^ppo.n_epochs: must be in \[1,"),
+        ({"ppo": {"batch_size": 100_000}}, r"^ppo.batch_size: must be in \[2, n_steps \* n_envs = 65536\]"),
+        ({"seed": 2**32}, r"^seed: must be in \[0, 4294967295\]"),
+        ({"env": {"goall": [0, 1]}}, "^env.goall: unknown field `goall`"),
+        ({"env": {"snake": {"mass": 1}}}, "^env.snake.mass: unknown field `mass`"),
+        ({"env": {"observation": "full"}}, "^env.observation: unknown variant `full`"),
+        (
+            {"env": {"reward": {"progress_weight": "a"}}},
+            '^env.reward.progress_weight: invalid type: string "a"',
+        ),
+        ({"env": {"max_episode_steps": 1e30}}, "^env.max_episode_steps: invalid type: floating point"),
+        ({"device": "tpu"}, "^device: expected auto, cpu, cuda or cuda:N, got 'tpu'"),
+        ({"normalize": "yes"}, '^normalize: invalid type: string "yes", expected a boolean'),
     ],
 )
 def test_bad_configs_name_the_key(config, match):
@@ -104,7 +119,7 @@ def test_bad_configs_name_the_key(config, match):
 def test_bad_yaml_files(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("joints: [5\narch: small\n")
-    with pytest.raises(runconfig.ConfigError, match=r"bad.yaml is not valid YAML \(line"):
+    with pytest.raises(runconfig.ConfigError, match=r"bad.yaml: not valid YAML \(line"):
         runconfig.load_yaml(bad)
     listing = tmp_path / "list.yaml"
     listing.write_text("- 1\n- 2\n")
@@ -121,12 +136,41 @@ def _write(path, text):
 
 
 def test_parse_set():
-    assert runconfig.parse_set(["ppo.n_steps=64", "seed=3", "env.start={x: [0, 0]}"]) == {
-        "ppo": {"n_steps": 64},
+    # Values are YAML, parsed by the same rules as the config files: 3e-4 is a number.
+    assert runconfig.parse_set(
+        [
+            "ppo.n_steps=64",
+            "seed=3",
+            "env.start={x: [0, 0]}",
+            "ppo.learning_rate=3e-4",
+            "env.reward.progress_weight=2",
+        ]
+    ) == {
+        "ppo": {"n_steps": 64, "learning_rate": 3e-4},
         "seed": 3,
-        "env": {"start": {"x": [0, 0]}},
+        "env": {"start": {"x": [0, 0]}, "reward": {"progress_weight": 2}},
     }
     with pytest.raises(runconfig.ConfigError, match="KEY=VALUE"):
         runconfig.parse_set(["n_steps"])
-    with pytest.raises(runconfig.ConfigError, match="only the ppo and env tables"):
-        runconfig.parse_set(["joints.x=1"])
+    with pytest.raises(runconfig.ConfigError, match="is not a key path"):
+        runconfig.parse_set(["ppo..n_steps=1"])
+
+
+def test_set_merges_into_nested_tables():
+    config = runconfig.resolve(
+        runconfig.merge(
+            {"env": {"reward": {"smoothness_weight": 0.5}}},
+            runconfig.parse_set(["env.reward.progress_weight=1", "timesteps=2e6"]),
+        )
+    )
+    assert config["env"]["reward"] == {"smoothness_weight": 0.5, "progress_weight": 1}
+    assert config["timesteps"] == 2_000_000
+
+
+def test_linear_schedules():
+    config = runconfig.validate({"ppo": {"learning_rate": "lin_1e-3", "clip_range": "lin_0.3"}})
+    assert config["ppo"]["learning_rate"] == "lin_0.001"
+    lr = runconfig.schedule(config["ppo"]["learning_rate"])
+    assert lr(1.0) == 1e-3 and lr(0.5) == 5e-4
+    with pytest.raises(runconfig.ConfigError, match="^ppo.learning_rate: expected a number or lin_"):
+        runconfig.validate({"ppo": {"learning_rate": "fast"}})

@@ -147,18 +147,17 @@ mod integer {
         }
 
         fn visit_i64<E: de::Error>(self, v: i64) -> Result<u64, E> {
-            u64::try_from(v)
-                .map_err(|_| E::custom(format!("expected a non-negative integer, got {v}")))
+            u64::try_from(v).map_err(|_| E::invalid_value(de::Unexpected::Signed(v), &self))
         }
 
         fn visit_f64<E: de::Error>(self, v: f64) -> Result<u64, E> {
-            // Below 2^53 every integer is exact in a double.
+            // Below 2^53 every integer is exact in a double: 2e7 is 20000000.
             if v.fract() == 0.0 && (0.0..9_007_199_254_740_992.0).contains(&v) {
                 Ok(v as u64)
+            } else if v.fract() == 0.0 {
+                Err(E::invalid_value(de::Unexpected::Float(v), &self))
             } else {
-                Err(E::custom(format!(
-                    "expected a non-negative integer, got {v}"
-                )))
+                Err(E::invalid_type(de::Unexpected::Float(v), &self))
             }
         }
     }
@@ -436,6 +435,11 @@ pub fn env_config(
             format!("{prefix}.{key}")
         }
     };
+    let max = snake_core::config::MAX_JOINTS;
+    if !(1..=max).contains(&joints) {
+        // `joints` is a key of its own (the run's top level, or SnakeEnv's keyword), not of `env`.
+        return Err(err(format!("joints: must be in [1, {max}], got {joints}")));
+    }
     for key in ["joints", "preset"] {
         if table.contains_key(key) {
             return Err(err(format!(
@@ -465,6 +469,44 @@ pub fn env_config(
     let config: EnvConfig = from_value(Value::Object(object), prefix)?;
     config.validate().map_err(|e| with_path(prefix, e))?;
     Ok(config)
+}
+
+/// The env of `snakesim.SnakeEnv(**keywords)`: the keywords as one mapping, `joints` and `preset`
+/// among them (defaults 5 and `paper`).
+pub fn env_from_keywords(keywords: &Map<String, Value>) -> Result<EnvConfig, ConfigError> {
+    let mut table = keywords.clone();
+    let defaults = RunConfig::default();
+    let joints: usize = match table.remove("joints") {
+        None => defaults.joints,
+        Some(v) => {
+            #[derive(Deserialize)]
+            struct Joints(#[serde(deserialize_with = "integer::deserialize")] usize);
+            let Joints(j) = from_value(v, "joints")?;
+            j
+        }
+    };
+    let preset: Preset = match table.remove("preset") {
+        None => defaults.preset,
+        Some(v) => from_value(v, "preset")?,
+    };
+    env_config(joints, preset, &table, "")
+}
+
+/// Every keyword of `snakesim.SnakeEnv` with its default, `snake` (the preset's parameters) left out.
+pub fn env_keyword_defaults() -> Map<String, Value> {
+    let defaults = RunConfig::default();
+    let mut map = Map::new();
+    map.insert("joints".into(), Value::from(defaults.joints));
+    map.insert("preset".into(), Value::from(defaults.preset.name()));
+    let Value::Object(env) = serde_json::to_value(EnvConfig::default()).expect("serialises") else {
+        unreachable!("EnvConfig serialises to a mapping")
+    };
+    for (k, v) in env {
+        if k != "snake" {
+            map.insert(k, v);
+        }
+    }
+    map
 }
 
 /// snake-core's "field.path must be ..." messages as "prefix.field.path: must be ...".
@@ -713,11 +755,13 @@ mod tests {
             error("ppo: {learning_rate: abc}").starts_with("ppo.learning_rate: expected a number")
         );
         assert!(error("ppo: {n_epochs: 0}").starts_with("ppo.n_epochs: must be in [1,"));
-        assert!(error("ppo: {n_steps: 2.5}")
-            .starts_with("ppo.n_steps: expected a non-negative integer"));
+        assert!(error("ppo: {n_steps: 2.5}").starts_with(
+            "ppo.n_steps: invalid type: floating point `2.5`, expected a non-negative integer"
+        ));
         assert!(error("ppo: {batch_size: 100000}")
             .starts_with("ppo.batch_size: must be in [2, n_steps"));
-        assert!(error("n_envs: -1").starts_with("n_envs: expected a non-negative integer"));
+        assert!(error("n_envs: -1")
+            .starts_with("n_envs: invalid value: integer `-1`, expected a non-negative integer"));
         assert!(error("seed: 4294967296").starts_with("seed: must be in [0, 4294967295]"));
         assert!(error("arch: huge").starts_with("arch: unknown variant `huge`"));
         assert!(error("env: {reward: {progress_weight: a}}")
@@ -753,6 +797,33 @@ mod tests {
         assert_eq!((r.progress_weight, r.smoothness_weight), (1.0, 0.5));
         assert!(parse_overrides(&["ppo.n_steps"]).is_err());
         assert!(parse_overrides(&["ppo..n=1"]).is_err());
+    }
+
+    #[test]
+    fn env_keywords() {
+        let kw = |text: &str| -> Map<String, Value> { serde_json::from_str(text).unwrap() };
+        let c = env_from_keywords(&kw(
+            r#"{"joints": 7, "preset": "snakebot-gym", "goal": [1, 2]}"#,
+        ))
+        .unwrap();
+        assert_eq!(
+            (c.joints(), c.snake.link_mass, c.goal),
+            (7, 1.0, (1.0, 2.0))
+        );
+        assert_eq!(
+            env_from_keywords(&Map::new()).unwrap(),
+            EnvConfig::default()
+        );
+        let e = |text: &str| env_from_keywords(&kw(text)).unwrap_err().0;
+        assert!(e(r#"{"joints": 2.5}"#).starts_with("joints: invalid type: floating point `2.5`"));
+        assert!(e(r#"{"joints": 0}"#).starts_with("joints: must be in [1, 512], got 0"));
+        assert!(e(r#"{"joints": true}"#).starts_with("joints: invalid type: boolean"));
+        assert!(e(r#"{"preset": "x"}"#).starts_with("preset: unknown variant `x`"));
+        assert!(e(r#"{"action_scale": "2"}"#).starts_with("action_scale: invalid type: string"));
+        let d = env_keyword_defaults();
+        assert_eq!(d["joints"], 5);
+        assert_eq!(d["max_episode_steps"], 5000);
+        assert!(!d.contains_key("snake"));
     }
 
     #[test]

@@ -6,7 +6,13 @@
 
 pub mod buffer;
 pub mod config;
+pub mod evaluate;
+pub mod model;
 pub mod nn;
 pub mod normalize;
 pub mod optim;
+pub mod policy;
 pub mod ppo;
+pub mod rundir;
+pub mod tensorboard;
+pub mod trainer;

@@ -4,6 +4,11 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Added to the variance before the square root (SB3's `VecNormalize` epsilon).
+pub const EPSILON: f64 = 1e-8;
+/// Normalised observations and rewards are clipped to +-this (SB3's defaults).
+pub const CLIP: f64 = 10.0;
+
 /// Running mean and (population) variance, merged batch by batch (Chan et al.), in double precision;
 /// SB3's `RunningMeanStd` with its initial count of 1e-4.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -54,6 +59,17 @@ impl RunningMeanStd {
         self.count += n;
     }
 
+    /// `clip((x - mean) / sqrt(var + 1e-8), -10, 10)` of every row of `obs`, in place.
+    pub fn normalize(&self, obs: &mut [f32]) {
+        let dim = self.mean.len();
+        for row in obs.chunks_exact_mut(dim) {
+            for ((x, m), v) in row.iter_mut().zip(&self.mean).zip(&self.var) {
+                let z = (f64::from(*x) - m) / (v + EPSILON).sqrt();
+                *x = z.clamp(-CLIP, CLIP) as f32;
+            }
+        }
+    }
+
     /// The same for single values (one component).
     pub fn update_scalars(&mut self, values: &[f64]) {
         let n = values.len() as f64;
@@ -100,9 +116,9 @@ impl Normalizer {
             ret_rms: RunningMeanStd::new(1),
             returns: vec![0.0; num_envs],
             gamma,
-            epsilon: 1e-8,
-            clip_obs: 10.0,
-            clip_reward: 10.0,
+            epsilon: EPSILON,
+            clip_obs: CLIP,
+            clip_reward: CLIP,
         }
     }
 

@@ -43,10 +43,9 @@ class _Dummy:
 
 
 def make_ppo(case):
+    from snakesim.policies import policy_kwargs
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import DummyVecEnv
-
-    from snakesim.policies import policy_kwargs
 
     obs_dim, act_dim, rows = case["obs_dim"], case["act_dim"], case["rows"]
     obs_space = spaces.Box(-np.inf, np.inf, (obs_dim,), dtype=np.float32)
@@ -133,7 +132,14 @@ def run_ppo(case):
         "values": floats(values.flatten()),
         "stats": {
             key: float(logged[f"train/{key}"])
-            for key in ("policy_gradient_loss", "value_loss", "entropy_loss", "approx_kl", "clip_fraction", "loss")
+            for key in (
+                "policy_gradient_loss",
+                "value_loss",
+                "entropy_loss",
+                "approx_kl",
+                "clip_fraction",
+                "loss",
+            )
         },
         "grads": {name: floats(named[name].grad) for name in case["tensors"]},
         "params_after": {name: floats(named[name]) for name in case["tensors"]},

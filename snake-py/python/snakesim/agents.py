@@ -23,10 +23,12 @@ import numpy as np
 from snakesim import runconfig
 
 MODEL_FILE = "model.zip"
+NATIVE_MODEL_FILE = "model.safetensors"
 VECNORMALIZE_FILE = "vecnormalize.pkl"
 CONFIG_FILE = "config.yaml"
 CHECKPOINT_DIR = "checkpoints"
 _CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
+_NATIVE_CHECKPOINT = re.compile(r"^model_(\d+)_steps\.safetensors$")
 
 
 class AgentError(ValueError):
@@ -54,26 +56,32 @@ class Agent:
     num_timesteps: int | None
     obs_normalizer: Any = None  # a VecNormalize whose statistics normalise observations, or None
     config: dict[str, Any] | None = None  # the run's config.yaml, when loaded from a run directory
+    kind: str = "sb3"  # "sb3" (policy: an SB3 ActorCriticPolicy) or "native" (a _core.NativePolicy)
 
     @property
     def joints(self) -> int:
         return int(self.env_kwargs["joints"])
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
+        if self.kind == "native":
+            # The native policy normalises observations itself (with its saved statistics).
+            return self.policy.act(np.ascontiguousarray(obs, dtype=np.float32), deterministic)
         if self.obs_normalizer is not None:
             obs = self.obs_normalizer.normalize_obs(obs)
         actions, _ = self.policy.predict(obs, deterministic=deterministic)
         return actions
 
 
-def checkpoints(run_dir: str | os.PathLike) -> list[tuple[int, Path]]:
-    """The run's checkpoints as (timesteps, path), oldest first."""
+def checkpoints(run_dir: str | os.PathLike, native: bool = False) -> list[tuple[int, Path]]:
+    """The run's checkpoints as (timesteps, path), oldest first: SB3's zips, or the native trainer's
+    safetensors files with ``native``."""
     folder = Path(run_dir) / CHECKPOINT_DIR
     if not folder.is_dir():
         return []
+    pattern = _NATIVE_CHECKPOINT if native else _CHECKPOINT
     found = []
     for path in folder.iterdir():
-        match = _CHECKPOINT.match(path.name)
+        match = pattern.match(path.name)
         if match:
             found.append((int(match.group(1)), path))
     return sorted(found)
@@ -198,14 +206,24 @@ def load_agent(
     env_overrides: Mapping[str, Any] | None = None,
     device: str = "cpu",
 ) -> Agent:
-    """A run directory (its model.zip, else its latest checkpoint; its config.yaml) or a bare SB3 zip.
+    """A run directory (its final model, else its latest checkpoint; its config.yaml), a bare SB3 zip
+    or a native ``.safetensors`` model.
 
     For a run directory, ``joints`` and ``preset`` must agree with its config when given. For a bare
-    zip, ``joints`` defaults to what the model's action space says and ``preset`` to ``paper``.
+    zip, ``joints`` defaults to what the model's action space says and ``preset`` to ``paper``; a
+    native model file names its own env.
     """
     source = Path(source)
     config = None
     normalizer_path = None
+    native = source.suffix == ".safetensors"
+    if source.is_dir() and (source / CONFIG_FILE).is_file():
+        try:
+            native = runconfig.load(source / CONFIG_FILE)["trainer"] == "native"
+        except runconfig.ConfigError as error:
+            raise AgentError(str(error)) from None
+    if native:
+        return _load_native_agent(source, joints=joints, preset=preset, env_overrides=env_overrides)
     if source.is_dir():
         config_path = source / CONFIG_FILE
         if not config_path.is_file():
@@ -236,13 +254,12 @@ def load_agent(
     if env_kwargs["joints"] is None:
         env_kwargs["joints"] = info.action_dim
     env_kwargs.update(env_overrides or {})
-    try:
-        runconfig.check_env_kwargs(env_kwargs)
-    except runconfig.ConfigError as error:
-        raise AgentError(str(error)) from None
     from snakesim.env import SnakeEnv
 
-    probe = SnakeEnv(**env_kwargs)
+    try:
+        probe = SnakeEnv(**env_kwargs)
+    except (TypeError, ValueError) as error:
+        raise AgentError(str(error)) from None
     obs_dim, act_dim = probe.observation_space.shape[0], probe.action_space.shape[0]
     if (info.observation_dim, info.action_dim) != (obs_dim, act_dim):
         raise AgentError(
@@ -265,6 +282,64 @@ def load_agent(
         num_timesteps=info.num_timesteps,
         obs_normalizer=normalizer,
         config=config,
+    )
+
+
+def _load_native_agent(
+    source: Path,
+    *,
+    joints: int | None,
+    preset: str | None,
+    env_overrides: Mapping[str, Any] | None,
+) -> Agent:
+    """A native run directory (model.safetensors, else its latest checkpoint) or model file."""
+    from snakesim import _core
+    from snakesim.env import SnakeEnv
+
+    config = None
+    if source.is_dir():
+        config = runconfig.load(source / CONFIG_FILE)
+        model_path = source / NATIVE_MODEL_FILE
+        if not model_path.is_file():
+            found = checkpoints(source, native=True)
+            if not found:
+                raise AgentError(f"{source} has no {NATIVE_MODEL_FILE} and no checkpoints yet")
+            model_path = found[-1][1]
+    elif source.is_file():
+        model_path = source
+    else:
+        raise AgentError(f"{source} does not exist (expected a run directory or a model file)")
+    try:
+        policy = _core.NativePolicy(os.fspath(model_path))
+    except ValueError as error:
+        raise AgentError(str(error)) from None
+    env_kwargs: dict[str, Any] = {
+        "joints": policy.joints,
+        "preset": policy.preset,
+        **json.loads(policy.env_json()),
+    }
+    for name, given in (("joints", joints), ("preset", preset)):
+        if given is not None and given != env_kwargs[name]:
+            raise AgentError(f"{model_path} was trained with {name} {env_kwargs[name]}, not {given}")
+    env_kwargs.update(env_overrides or {})
+    try:
+        probe = SnakeEnv(**env_kwargs)
+    except (TypeError, ValueError) as error:
+        raise AgentError(str(error)) from None
+    if (probe.observation_space.shape[0], probe.action_space.shape[0]) != (policy.obs_dim, policy.act_dim):
+        raise AgentError(
+            f"{model_path} expects {policy.obs_dim} observations and {policy.act_dim} actions, but the env "
+            f"has {probe.observation_space.shape[0]} and {probe.action_space.shape[0]}"
+        )
+    return Agent(
+        policy=policy,
+        path=os.fspath(model_path),
+        env_kwargs=env_kwargs,
+        arch=policy.arch,
+        sb3_version="native",
+        num_timesteps=policy.timesteps,
+        config=config,
+        kind="native",
     )
 
 

@@ -82,6 +82,8 @@ def check_writable(path: str | os.PathLike, what: str = "") -> Path:
 # -- train ----------------------------------------------------------------------------------------
 # Command-line flags that set configuration keys (argparse dest -> key).
 _TRAIN_FLAGS = (
+    "trainer",
+    "threads",
     "joints",
     "arch",
     "preset",
@@ -114,39 +116,69 @@ def _train_overrides(args: argparse.Namespace) -> dict[str, Any]:
     return overrides
 
 
-def cmd_train(args: argparse.Namespace) -> int:
-    from snakesim.train import Trainer, TrainingInterrupted
+def _trainer_kind(overrides: dict[str, Any], args: argparse.Namespace) -> str:
+    """The trainer a run uses: the flag or config's, else (resuming) the saved run's, else the default."""
+    if "trainer" in overrides:
+        return overrides["trainer"]
+    if args.resume and args.run_dir is not None:
+        saved = Path(args.run_dir) / "config.yaml"
+        if saved.is_file():
+            return runconfig.load(saved)["trainer"]
+    return runconfig.DEFAULTS["trainer"]
 
-    trainer = Trainer(
-        _train_overrides(args),
-        run_dir=args.run_dir,
-        resume=args.resume,
-        progress=args.progress,
-        verbose=1 if args.verbose else 0,
-    )
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from snakesim.train import TrainingInterrupted
+
+    overrides = _train_overrides(args)
+    native = _trainer_kind(overrides, args) == "native"
+    if native:
+        from snakesim.native import NativeTrainer
+
+        trainer = NativeTrainer(overrides, run_dir=args.run_dir, resume=args.resume, progress=args.progress)
+    else:
+        from snakesim.train import Trainer
+
+        trainer = Trainer(
+            overrides,
+            run_dir=args.run_dir,
+            resume=args.resume,
+            progress=args.progress,
+            verbose=1 if args.verbose else 0,
+        )
     config = trainer.config
     print(
-        f"run {trainer.run_dir}: PPO-{config['arch']}, {config['joints']} joints, preset {config['preset']}, "
-        f"{config['timesteps']:,} timesteps, {config['n_envs']} envs, seed {config['seed']}"
+        f"run {trainer.run_dir}: PPO-{config['arch']} ({config['trainer']} trainer), "
+        f"{config['joints']} joints, preset {config['preset']}, {config['timesteps']:,} timesteps, "
+        f"{config['n_envs']} envs, seed {config['seed']}"
         + (f" (resuming from {trainer.resume_from[0]:,})" if trainer.resume_from else ""),
         flush=True,
     )
+    model_file = "model.safetensors" if native else "model.zip"
     try:
         result = trainer.run()
     except TrainingInterrupted as stop:
         print(
             f"snakesim train: interrupted at {stop.timesteps:,} timesteps; saved {stop.path} and "
-            f"{trainer.run_dir / 'model.zip'}; continue with: "
+            f"{trainer.run_dir / model_file}; continue with: "
             f"snakesim train --run-dir {trainer.run_dir} --resume",
             file=sys.stderr,
         )
         return 130
-    import torch
+    if native:
+        d = result.details or {}
+        where = (
+            f"rollouts {d.get('rollout_seconds', 0):.1f} s, updates {d.get('update_seconds', 0):.1f} s, "
+            f"{d.get('threads')} threads; memory {d['rss_mib'][0]:.0f} -> {d['rss_mib'][1]:.0f} MiB"
+        )
+    else:
+        import torch
 
+        where = f"device {trainer.model.device}, torch threads {torch.get_num_threads()}"
     print(
         f"trained {result.timesteps - result.start_timesteps:,} timesteps in {result.seconds:.1f} s: "
         f"{result.timesteps_per_second:.0f} timesteps/s ({result.training_timesteps_per_second:.0f} without "
-        f"evaluations; device {trainer.model.device}, torch threads {torch.get_num_threads()})"
+        f"evaluations; {where})"
     )
     last = result.last_evaluation
     if last is not None:
@@ -156,7 +188,9 @@ def cmd_train(args: argparse.Namespace) -> int:
             f"mean return {last['mean_return']:.1f} ± {last['std_return']:.1f}, "
             f"success rate {last['success_rate']:.2f}, mean steps to goal {steps}"
         )
-    print(f"wrote {result.run_dir}/model.zip, evaluations.csv, config.yaml, versions.json, tb/, checkpoints/")
+    print(
+        f"wrote {result.run_dir}/{model_file}, evaluations.csv, config.yaml, versions.json, tb/, checkpoints/"
+    )
     return 0
 
 
@@ -202,7 +236,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     seconds = report["mean_seconds_to_goal"]
     mode = "stochastic" if args.stochastic else "deterministic"
     rows = [
-        ("model", f"{agent.path} (PPO-{agent.arch}, SB3 {agent.sb3_version})"),
+        (
+            "model",
+            f"{agent.path} (PPO-{agent.arch}, "
+            + ("native trainer)" if agent.kind == "native" else f"SB3 {agent.sb3_version})"),
+        ),
         ("env", f"{agent.joints} joints, preset {report['preset']}"),
         (
             "episodes",
@@ -258,10 +296,36 @@ def cmd_replay(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- export ---------------------------------------------------------------------------------------
+def cmd_export(args: argparse.Namespace) -> int:
+    from snakesim.export import to_sb3
+
+    out = check_writable(args.sb3, "--sb3")
+    if out.suffix.lower() != ".zip":
+        raise UserError(f"cannot write --sb3 {out}: expected a .zip file")
+    agent = _load_agent(args)
+    if agent.kind != "native":
+        raise UserError(
+            f"{agent.path} is already a Stable-Baselines3 model; export takes native runs and models"
+        )
+    try:
+        written = to_sb3(agent, out)
+    except OSError as error:
+        raise UserError(f"cannot write --sb3 {out}: {error.strerror or error}") from None
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    print(
+        f"wrote {', '.join(map(str, written))} (PPO-{agent.arch}, {agent.joints} joints; load with PPO.load)"
+    )
+    return 0
+
+
 # -- the parser -----------------------------------------------------------------------------------
 def _agent_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "source", metavar="RUN_OR_MODEL", help="a run directory or an SB3 model .zip (SB3 1.x or 2.x)"
+        "source",
+        metavar="RUN_OR_MODEL",
+        help="a run directory, a native model .safetensors or an SB3 model .zip (SB3 1.x or 2.x)",
     )
     p.add_argument(
         "--joints", type=_positive_int, help="for a bare .zip: the snake's joints (default: from the model)"
@@ -278,6 +342,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)
     S = argparse.SUPPRESS
+    D = runconfig.DEFAULTS  # every default of a run, from snake-rl's RunConfig
 
     p = sub.add_parser(
         "train",
@@ -286,46 +351,64 @@ def build_parser() -> argparse.ArgumentParser:
         "< --config YAML < --set KEY=VALUE and the flags below.",
     )
     p.add_argument("--config", metavar="FILE.yaml", help="a run configuration (see snake-py/configs/)")
-    p.add_argument("--joints", type=_positive_int, default=S, help="snake joints (default 5)")
+    p.add_argument(
+        "--trainer",
+        choices=runconfig.TRAINERS,
+        default=S,
+        help=f"native: snake-rl, the whole loop in Rust; sb3: Stable-Baselines3 (default {D['trainer']})",
+    )
+    p.add_argument(
+        "--threads",
+        type=_positive_int,
+        default=S,
+        help="native trainer: threads of the envs and the updates (default: one per core)",
+    )
+    p.add_argument("--joints", type=_positive_int, default=S, help=f"snake joints (default {D['joints']})")
     p.add_argument(
         "--arch",
         choices=runconfig.ARCHS,
         default=S,
         help="small: pi/vf [64, 64]; large: shared [128, 128] first",
     )
-    p.add_argument("--preset", choices=PRESETS, default=S, help="robot preset (default paper)")
-    p.add_argument("--timesteps", type=_positive_int, default=S, help="total timesteps (default 20000000)")
+    p.add_argument("--preset", choices=PRESETS, default=S, help=f"robot preset (default {D['preset']})")
     p.add_argument(
-        "--n-envs", dest="n_envs", type=_positive_int, default=S, help="parallel envs (default 16)"
+        "--timesteps", type=_positive_int, default=S, help=f"total timesteps (default {D['timesteps']})"
     )
-    p.add_argument("--seed", type=_count, default=S, help="seed (default 42)")
+    p.add_argument(
+        "--n-envs",
+        dest="n_envs",
+        type=_positive_int,
+        default=S,
+        help=f"parallel envs (default {D['n_envs']})",
+    )
+    p.add_argument("--seed", type=_count, default=S, help=f"seed (default {D['seed']})")
     p.add_argument(
         "--eval-freq",
         dest="eval_freq",
         type=_count,
         default=S,
-        help="evaluate every N timesteps (default 250000; 0: at the end only)",
+        help=f"evaluate every N timesteps (default {D['eval_freq']}; 0: at the end only)",
     )
     p.add_argument(
         "--eval-episodes",
         dest="eval_episodes",
         type=_positive_int,
         default=S,
-        help="episodes per evaluation (default 10)",
+        help=f"episodes per evaluation (default {D['eval_episodes']})",
     )
     p.add_argument(
         "--eval-seed",
         dest="eval_seed",
         type=_count,
         default=S,
-        help="seed of the evaluation episodes (default seed + 1000)",
+        help=f"seed of the evaluation episodes (default seed + {runconfig.EVAL_SEED_OFFSET})",
     )
     p.add_argument(
         "--checkpoint-freq",
         dest="checkpoint_freq",
         type=_count,
         default=S,
-        help="checkpoint every N timesteps (default 1000000; 0: none)",
+        help=f"checkpoint every N timesteps (default {D['checkpoint_freq']}; 0: only the final one)",
     )
     p.add_argument(
         "--normalize", action="store_true", default=S, help="wrap the training env in VecNormalize"
@@ -411,6 +494,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--title", help="the figure's title")
     p.set_defaults(func=cmd_replay)
+
+    p = sub.add_parser(
+        "export",
+        help="write a native run's policy as a Stable-Baselines3 zip",
+        description="Write a native policy as an SB3 PPO zip that PPO.load opens and that acts as the native "
+        "policy does (observation statistics, if any, go beside it as NAME_vecnormalize.pkl).",
+    )
+    _agent_options(p)
+    p.add_argument("--sb3", required=True, metavar="MODEL.zip", help="the zip to write")
+    p.set_defaults(func=cmd_export)
     return parser
 
 
@@ -420,11 +513,19 @@ def main(argv: list[str] | None = None) -> int:
     from snakesim.agents import AgentError
     from snakesim.plots import PlotError
     from snakesim.replay import ReplayError
-    from snakesim.train import RunDirError
+    from snakesim.train import RunDirError, TrainingFailed
 
     try:
         return args.func(args)
-    except (UserError, runconfig.ConfigError, AgentError, RunDirError, PlotError, ReplayError) as error:
+    except (
+        UserError,
+        runconfig.ConfigError,
+        AgentError,
+        RunDirError,
+        PlotError,
+        ReplayError,
+        TrainingFailed,
+    ) as error:
         print(f"snakesim {args.command}: error: {_one_line(error)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from snakesim import _core
+from snakesim.config import ENV_DEFAULTS as _D
 from snakesim.config import env_config
 from snakesim.render import top_down
 
@@ -57,33 +58,34 @@ class SnakeEnv(gymnasium.Env):
 
     def __init__(
         self,
-        joints: int = 5,
-        preset: str = "paper",
-        goal: Sequence[float] = (0.0, -10.0),
-        goal_radius: float = 1.0,
-        max_episode_steps: int = 5000,
-        physics_steps_per_env_step: int = 1,
+        joints: int = _D["joints"],
+        preset: str = _D["preset"],
+        goal: Sequence[float] = tuple(_D["goal"]),
+        goal_radius: float = _D["goal_radius"],
+        max_episode_steps: int = _D["max_episode_steps"],
+        physics_steps_per_env_step: int = _D["physics_steps_per_env_step"],
         start: Mapping[str, Any] | None = None,
-        action_scale: float = 1.0,
-        observation: str = "paper",
+        action_scale: float = _D["action_scale"],
+        observation: str = _D["observation"],
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"unknown render_mode {render_mode!r} (expected None or 'rgb_array')")
+        # Kept as given (the Rust side checks them), for pickling and for SB3's get_attr.
         self._kwargs = dict(
             joints=joints,
             preset=preset,
-            goal=tuple(goal),
+            goal=goal,
             goal_radius=goal_radius,
             max_episode_steps=max_episode_steps,
             physics_steps_per_env_step=physics_steps_per_env_step,
-            start=None if start is None else dict(start),
+            start=start,
             action_scale=action_scale,
             observation=observation,
-            reward=None if reward is None else dict(reward),
-            snake=None if snake is None else dict(snake),
+            reward=reward,
+            snake=snake,
         )
         self._config_json = env_config(**self._kwargs)
         self._env = _core.Env(self._config_json)

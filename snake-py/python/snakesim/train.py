@@ -41,6 +41,11 @@ class RunDirError(ValueError):
     """A run directory that cannot be used as asked (exists, missing, nothing to resume, ...)."""
 
 
+class TrainingFailed(RuntimeError):
+    """Training stopped on an error of the run itself (a loss or gradient became non-finite, an env
+    blew up); the message says where, and what was saved."""
+
+
 class TrainingInterrupted(Exception):
     """Ctrl-C during training; a checkpoint was saved at ``timesteps`` in ``path``."""
 
@@ -58,6 +63,7 @@ class TrainResult:
     seconds: float  # wall time of this session's training, evaluations included
     eval_seconds: float
     last_evaluation: dict[str, Any] | None
+    details: dict[str, Any] | None = None  # the native trainer's split of the time, threads, memory
 
     @property
     def timesteps_per_second(self) -> float:
@@ -332,7 +338,10 @@ class Trainer:
             device=self.config["device"],
             tensorboard_log=tb,
             verbose=self.verbose,
-            **self.config["ppo"],
+            **{
+                key: runconfig.schedule(value) if key in ("learning_rate", "clip_range") else value
+                for key, value in self.config["ppo"].items()
+            },
         )
 
     def save_checkpoint(self, timesteps: int, reason: str = "periodic") -> Path:

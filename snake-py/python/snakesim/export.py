@@ -1,0 +1,95 @@
+"""Exporting a native policy as a Stable-Baselines3 model: ``snakesim export RUN --sb3 model.zip``.
+
+The native network and SB3's ``MlpPolicy`` with snakesim's policy_kwargs are the same network with the
+same tensor names (see snake-rl's ``nn::network``), so the weights move over one to one. A policy that
+normalises observations also gets its statistics, as a ``VecNormalize`` pickle beside the zip
+(``<name>_vecnormalize.pkl``): load it with ``VecNormalize.load(path, venv)`` and normalise observations
+before ``predict``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def vecnormalize_path(zip_path: str | os.PathLike) -> Path:
+    """Where the observation statistics of an exported model go."""
+    path = Path(zip_path)
+    return path.with_name(f"{path.stem}_vecnormalize.pkl")
+
+
+def _replace(target: Path, write) -> None:
+    """Writes through a temporary file in the same folder and a rename: never a half-written file."""
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, target)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
+    """Writes the native ``agent`` (see :func:`snakesim.agents.load_agent`) as an SB3 PPO zip; returns
+    the files written."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from snakesim.policies import policy_kwargs
+    from snakesim.sb3 import SnakeVecEnv
+
+    if agent.kind != "native":
+        raise ValueError(f"{agent.path} is not a native model (it is already an SB3 model)")
+    env = SnakeVecEnv(1, **agent.env_kwargs)
+    hyper: dict[str, Any] = {}
+    if agent.config is not None:
+        from snakesim import runconfig
+
+        ppo = agent.config["ppo"]
+        hyper = {
+            key: runconfig.schedule(ppo[key]) if key in ("learning_rate", "clip_range") else ppo[key]
+            for key in (
+                "learning_rate",
+                "n_steps",
+                "batch_size",
+                "n_epochs",
+                "gamma",
+                "gae_lambda",
+                "clip_range",
+            )
+        }
+    model = PPO("MlpPolicy", env, policy_kwargs=policy_kwargs(agent.arch), device="cpu", seed=0, **hyper)
+    state = model.policy.state_dict()
+    for name, array in agent.policy.tensors().items():
+        aliases = [name]
+        if name.startswith("features_extractor."):
+            rest = name[len("features_extractor.") :]
+            aliases += [f"pi_features_extractor.{rest}", f"vf_features_extractor.{rest}"]
+        for alias in aliases:
+            if alias not in state:
+                raise ValueError(f"{agent.path}: tensor {alias} has no place in SB3's {agent.arch} policy")
+            state[alias] = torch.from_numpy(np.array(array, dtype=np.float32))
+    model.policy.load_state_dict(state)
+    model.num_timesteps = int(agent.num_timesteps or 0)
+    out = Path(path)
+    # SB3 appends ".zip" only to a name without a suffix; the temporary file has one.
+    _replace(out, model.save)
+    written = [out]
+    stats = agent.policy.obs_rms()
+    if stats is not None:
+        mean, var, count = stats
+        normalizer = VecNormalize(env, training=False, norm_obs=True, norm_reward=False)
+        normalizer.obs_rms.mean = np.array(mean, dtype=np.float64)
+        normalizer.obs_rms.var = np.array(var, dtype=np.float64)
+        normalizer.obs_rms.count = float(count)
+        target = vecnormalize_path(out)
+        _replace(target, normalizer.save)
+        written.append(target)
+    return written

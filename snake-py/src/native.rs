@@ -1,0 +1,417 @@
+//! The native trainer (snake-rl) for Python: the run configuration, saved policies, and training with
+//! progress reported to a Python object.
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rand::SeedableRng;
+use rand_chacha::ChaCha12Rng;
+use serde_json::Value;
+use snake_rl::config::{self, RunConfig};
+use snake_rl::model::{self, SavedPolicy};
+use snake_rl::policy::Policy;
+use snake_rl::rundir::EvaluationRow;
+use snake_rl::trainer::{self, Observer, Outcome, Progress, Session};
+
+use super::config_error;
+
+fn json_value(text: &str, what: &str) -> PyResult<Value> {
+    serde_json::from_str(text)
+        .map_err(|e| PyValueError::new_err(format!("{what} is not JSON: {e}")))
+}
+
+/// The defaults of a run configuration, as JSON.
+#[pyfunction]
+fn run_config_defaults() -> String {
+    serde_json::to_string(&RunConfig::default()).expect("serialises")
+}
+
+/// The keywords of `SnakeEnv` with their defaults, as JSON.
+#[pyfunction]
+fn env_keyword_defaults() -> String {
+    Value::Object(config::env_keyword_defaults()).to_string()
+}
+
+/// A checked run configuration from layers (JSON mappings over the defaults, lowest first), as JSON.
+#[pyfunction]
+fn resolve_run_config(layers: Vec<String>) -> PyResult<String> {
+    let layers = layers
+        .iter()
+        .map(|l| json_value(l, "a configuration layer"))
+        .collect::<PyResult<Vec<_>>>()?;
+    let config = RunConfig::from_layers(&layers).map_err(config_error)?;
+    Ok(serde_json::to_string(&config).expect("serialises"))
+}
+
+/// Layers of keys (JSON mappings, lowest first) merged into one, key by key at every depth, without
+/// defaults or checks: what a run's overrides are before they meet a base configuration.
+#[pyfunction]
+fn merge_layers(layers: Vec<String>) -> PyResult<String> {
+    let mut out = Value::Object(serde_json::Map::new());
+    for l in &layers {
+        config::merge(&mut out, &json_value(l, "a configuration layer")?);
+    }
+    Ok(out.to_string())
+}
+
+/// YAML text of a (checked) configuration given as JSON.
+#[pyfunction]
+fn run_config_yaml(config_json: &str) -> PyResult<String> {
+    let config = RunConfig::from_layers(&[json_value(config_json, "the configuration")?])
+        .map_err(config_error)?;
+    Ok(config.to_yaml())
+}
+
+/// YAML text as JSON (YAML 1.2 scalars; an empty document is an empty mapping).
+#[pyfunction]
+fn parse_yaml(text: &str) -> PyResult<String> {
+    let v = config::parse_yaml(text).map_err(|e| PyValueError::new_err(e.0))?;
+    Ok(v.to_string())
+}
+
+/// `KEY=VALUE` overrides as one nested mapping, as JSON.
+#[pyfunction]
+fn parse_overrides(items: Vec<String>) -> PyResult<String> {
+    let v = config::parse_overrides(&items).map_err(|e| PyValueError::new_err(e.0))?;
+    Ok(v.to_string())
+}
+
+/// Observation statistics as numpy arrays: mean, variance, count.
+type ObsStats<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64);
+
+/// A trained native policy (`model.safetensors` or a checkpoint), ready to act.
+#[pyclass(module = "snakesim._core")]
+struct NativePolicy {
+    saved: SavedPolicy,
+    path: String,
+    policy: Mutex<(Policy, ChaCha12Rng)>,
+}
+
+fn model_error(e: model::ModelError) -> PyErr {
+    PyValueError::new_err(e.0)
+}
+
+#[pymethods]
+impl NativePolicy {
+    #[new]
+    #[pyo3(signature = (path, seed=0))]
+    fn new(path: PathBuf, seed: u64) -> PyResult<Self> {
+        let saved = model::load_policy(&path).map_err(model_error)?;
+        let policy = Policy::from_saved(&saved);
+        Ok(NativePolicy {
+            path: path.display().to_string(),
+            saved,
+            policy: Mutex::new((policy, ChaCha12Rng::seed_from_u64(seed))),
+        })
+    }
+
+    /// The file it was loaded from.
+    #[getter]
+    fn path(&self) -> &str {
+        &self.path
+    }
+
+    #[getter]
+    fn arch(&self) -> &'static str {
+        self.saved.net.arch().name()
+    }
+
+    #[getter]
+    fn obs_dim(&self) -> usize {
+        self.saved.net.obs_dim()
+    }
+
+    #[getter]
+    fn act_dim(&self) -> usize {
+        self.saved.net.act_dim()
+    }
+
+    #[getter]
+    fn joints(&self) -> usize {
+        self.saved.env.joints
+    }
+
+    #[getter]
+    fn preset(&self) -> &'static str {
+        self.saved.env.preset.name()
+    }
+
+    #[getter]
+    fn timesteps(&self) -> u64 {
+        self.saved.timesteps
+    }
+
+    #[getter]
+    fn normalize(&self) -> bool {
+        self.saved.obs_rms.is_some()
+    }
+
+    /// The env keywords it was trained with (besides joints and preset), as JSON.
+    fn env_json(&self) -> String {
+        Value::Object(self.saved.env.env.clone()).to_string()
+    }
+
+    /// Restarts the generator of sampled actions.
+    fn seed(&self, seed: u64) {
+        let mut guard = self.policy.lock().unwrap_or_else(|p| p.into_inner());
+        guard.1 = ChaCha12Rng::seed_from_u64(seed);
+    }
+
+    /// act(obs (n, obs_dim) float32, deterministic) -> actions (n, act_dim) float32 in [-1, 1].
+    #[pyo3(signature = (obs, deterministic=true))]
+    fn act<'py>(
+        &self,
+        py: Python<'py>,
+        obs: PyReadonlyArray2<'py, f32>,
+        deterministic: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let shape = obs.shape();
+        let (rows, d, n) = (shape[0], self.saved.net.obs_dim(), self.saved.net.act_dim());
+        if shape[1] != d {
+            return Err(PyValueError::new_err(format!(
+                "obs must have shape (n, {d}), got {shape:?}"
+            )));
+        }
+        let flat: Vec<f32> = obs.as_array().iter().copied().collect();
+        if let Some(i) = flat.iter().position(|x| !x.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "obs[{}, {}] must be finite, got {}",
+                i / d,
+                i % d,
+                flat[i]
+            )));
+        }
+        let mut actions = vec![0.0f32; rows * n];
+        if rows > 0 {
+            // Acting never releases the interpreter, so no other Python thread can wait on this lock
+            // while holding it.
+            let mut guard = self.policy.lock().unwrap_or_else(|p| p.into_inner());
+            let (policy, rng) = &mut *guard;
+            policy.act(&flat, rows, deterministic, rng, &mut actions);
+        }
+        Ok(PyArray1::from_vec(py, actions)
+            .reshape([rows, n])?
+            .into_any())
+    }
+
+    /// The parameters under SB3's state-dict names: name -> float32 array of the tensor's shape.
+    fn tensors<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for t in self.saved.net.tensors() {
+            let values = self.saved.params[t.offset..t.offset + t.len()].to_vec();
+            d.set_item(
+                &t.name,
+                PyArray1::from_vec(py, values).reshape(t.shape.clone())?,
+            )?;
+        }
+        Ok(d)
+    }
+
+    /// Observation statistics (mean, var, count) when it normalises observations, else None.
+    fn obs_rms<'py>(&self, py: Python<'py>) -> Option<ObsStats<'py>> {
+        self.saved.obs_rms.as_ref().map(|r| {
+            (
+                PyArray1::from_slice(py, &r.mean),
+                PyArray1::from_slice(py, &r.var),
+                r.count,
+            )
+        })
+    }
+}
+
+/// Forwards training events to a Python object's optional methods `on_start(start, total)`,
+/// `on_step(timesteps)` (at most every 0.1 s), `on_update(dict)` and `on_evaluation(dict)`; stops on
+/// Ctrl-C (checked at most every 20 ms, on the calling thread) or when a method raises.
+struct PyObserver {
+    target: Py<PyAny>,
+    error: Option<PyErr>,
+    last_step: Instant,
+    last_check: Instant,
+}
+
+impl PyObserver {
+    fn call(
+        &mut self,
+        method: &str,
+        args: impl for<'py> FnOnce(Python<'py>) -> PyResult<Bound<'py, PyAny>>,
+    ) {
+        if self.error.is_some() {
+            return;
+        }
+        Python::attach(|py| {
+            let target = self.target.bind(py);
+            if !target.hasattr(method).unwrap_or(false) {
+                return;
+            }
+            let result = args(py).and_then(|a| target.call_method1(method, (a,)));
+            if let Err(e) = result {
+                self.error = Some(e);
+            }
+        });
+    }
+}
+
+fn evaluation_dict<'py>(py: Python<'py>, row: &EvaluationRow) -> PyResult<Bound<'py, PyAny>> {
+    let d = PyDict::new(py);
+    d.set_item("timesteps", row.timesteps)?;
+    d.set_item("mean_return", row.mean_return)?;
+    d.set_item("std_return", row.std_return)?;
+    d.set_item("success_rate", row.success_rate)?;
+    d.set_item("mean_steps_to_goal", row.mean_steps_to_goal)?;
+    d.set_item("wall_time", row.wall_time)?;
+    Ok(d.into_any())
+}
+
+impl Observer for PyObserver {
+    fn on_start(&mut self, start: u64, total: u64) {
+        if self.error.is_some() {
+            return;
+        }
+        Python::attach(|py| {
+            let target = self.target.bind(py);
+            if target.hasattr("on_start").unwrap_or(false) {
+                if let Err(e) = target.call_method1("on_start", (start, total)) {
+                    self.error = Some(e);
+                }
+            }
+        });
+    }
+
+    fn on_step(&mut self, timesteps: u64) {
+        if self.last_step.elapsed() >= Duration::from_millis(100) {
+            self.last_step = Instant::now();
+            self.call("on_step", |py| Ok(timesteps.into_pyobject(py)?.into_any()));
+        }
+    }
+
+    fn on_update(&mut self, p: &Progress) {
+        let p = *p;
+        self.call("on_update", move |py| {
+            let d = PyDict::new(py);
+            d.set_item("timesteps", p.timesteps)?;
+            d.set_item("total", p.total)?;
+            d.set_item("timesteps_per_second", p.timesteps_per_second)?;
+            d.set_item("ep_rew_mean", p.ep_rew_mean)?;
+            d.set_item("ep_success_rate", p.ep_success_rate)?;
+            d.set_item("rollout_seconds", p.rollout_seconds)?;
+            d.set_item("update_seconds", p.update_seconds)?;
+            d.set_item("value_loss", p.update.value_loss)?;
+            d.set_item("std", p.update.std)?;
+            Ok(d.into_any())
+        });
+    }
+
+    fn on_evaluation(&mut self, row: &EvaluationRow) {
+        let row = *row;
+        self.call("on_evaluation", move |py| evaluation_dict(py, &row));
+    }
+
+    fn should_stop(&mut self) -> bool {
+        if self.error.is_some() {
+            return true;
+        }
+        if self.last_check.elapsed() >= Duration::from_millis(20) {
+            self.last_check = Instant::now();
+            if let Err(e) = Python::attach(|py| py.check_signals()) {
+                self.error = Some(e);
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// train(config_json, run_dir, resume, versions_json, observer) -> dict: trains a run with the native
+/// trainer. The dict has the session's figures, `interrupted` and, when interrupted, `checkpoint`; a
+/// KeyboardInterrupt during training ends it that way (after saving), other errors raise.
+#[pyfunction]
+fn train<'py>(
+    py: Python<'py>,
+    config_json: &str,
+    run_dir: PathBuf,
+    resume: bool,
+    versions_json: &str,
+    observer: Py<PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let config = RunConfig::from_layers(&[json_value(config_json, "the configuration")?])
+        .map_err(config_error)?;
+    let Value::Object(versions) = json_value(versions_json, "versions")? else {
+        return Err(PyValueError::new_err("versions must be a JSON mapping"));
+    };
+    let session = Session {
+        config,
+        run_dir,
+        resume,
+        versions,
+    };
+    let mut obs = PyObserver {
+        target: observer,
+        error: None,
+        last_step: Instant::now(),
+        last_check: Instant::now(),
+    };
+    let outcome = py.detach(|| trainer::train(&session, &mut obs));
+    let outcome = outcome.map_err(|e| match e {
+        trainer::TrainError::Setup(m) => PyValueError::new_err(m),
+        trainer::TrainError::Io(m) => PyOSError::new_err(m),
+        other => PyRuntimeError::new_err(other.to_string()),
+    })?;
+    let (summary, checkpoint) = match outcome {
+        Outcome::Finished(s) => (s, None),
+        Outcome::Interrupted(s, path) => (s, Some(path)),
+    };
+    if let Some(e) = obs.error.take() {
+        if !e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+            return Err(e);
+        }
+    }
+    let d = PyDict::new(py);
+    d.set_item("run_dir", summary.run_dir.display().to_string())?;
+    d.set_item("start_timesteps", summary.start_timesteps)?;
+    d.set_item("timesteps", summary.timesteps)?;
+    d.set_item("seconds", summary.seconds)?;
+    d.set_item("eval_seconds", summary.eval_seconds)?;
+    d.set_item("rollout_seconds", summary.rollout_seconds)?;
+    d.set_item("update_seconds", summary.update_seconds)?;
+    d.set_item("threads", summary.threads)?;
+    d.set_item("rss_mib", summary.rss_mib)?;
+    d.set_item(
+        "last_evaluation",
+        summary
+            .last_evaluation
+            .map(|r| evaluation_dict(py, &r))
+            .transpose()?,
+    )?;
+    d.set_item("interrupted", checkpoint.is_some())?;
+    d.set_item("checkpoint", checkpoint.map(|p| p.display().to_string()))?;
+    Ok(d)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(run_config_defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(env_keyword_defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(resolve_run_config, m)?)?;
+    m.add_function(wrap_pyfunction!(run_config_yaml, m)?)?;
+    m.add_function(wrap_pyfunction!(merge_layers, m)?)?;
+    m.add_function(wrap_pyfunction!(parse_yaml, m)?)?;
+    m.add_function(wrap_pyfunction!(parse_overrides, m)?)?;
+    m.add_function(wrap_pyfunction!(train, m)?)?;
+    m.add_class::<NativePolicy>()?;
+    m.add("IDENTITY_KEYS", snake_rl::config::IDENTITY_KEYS.to_vec())?;
+    m.add(
+        "PRESETS",
+        snake_core::Preset::ALL
+            .iter()
+            .map(|p| p.name())
+            .collect::<Vec<_>>(),
+    )?;
+    m.add("ARCHS", snake_rl::nn::Arch::NAMES.to_vec())?;
+    m.add("EVAL_SEED_OFFSET", snake_rl::config::EVAL_SEED_OFFSET)?;
+    m.add("NATIVE_MODEL_FILE", snake_rl::rundir::MODEL_FILE)?;
+    Ok(())
+}

@@ -1,0 +1,452 @@
+//! Saved policies and training checkpoints: safetensors files whose tensors carry Stable-Baselines3's
+//! `state_dict` names and whose JSON metadata says what the policy acts on.
+//!
+//! A policy file (`model.safetensors`) holds the network's tensors (float32), and, when the run
+//! normalised observations, `obs_rms.mean` and `obs_rms.var` (float64). Its metadata (all strings):
+//!
+//! | key | value |
+//! |---|---|
+//! | `format` | `snakesim-ppo` |
+//! | `format_version` | `1` |
+//! | `arch` | `small` or `large` |
+//! | `obs_dim`, `act_dim` | observation and action lengths |
+//! | `joints`, `preset` | the snake |
+//! | `env` | the run's env keywords (JSON), as `snakesim.SnakeEnv` takes them |
+//! | `env_config` | the complete resolved env configuration (JSON) |
+//! | `observation` | the observation layout (`paper`, `extended`) |
+//! | `action` | the action layout: `N joint targets in [-1, 1] x action_scale rad, head to tail` |
+//! | `normalize` | `true` when observations are normalised with `obs_rms` (clip 10, eps 1e-8) |
+//! | `timesteps` | timesteps trained |
+//!
+//! A checkpoint (`checkpoints/model_<T>_steps.safetensors`) adds what resuming needs: Adam's moments
+//! (`adam.exp_avg`, `adam.exp_avg_sq`), the return statistics (`ret_rms.*`), and in its metadata
+//! Adam's step, the statistics' counts, the random generator's state, the updates done and the wall
+//! time.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use rand_chacha::ChaCha12Rng;
+use safetensors::{Dtype, SafeTensors};
+use serde_json::{Map, Value};
+use snake_core::{EnvConfig, Preset};
+
+use crate::nn::{ActorCritic, Arch};
+use crate::normalize::{Normalizer, RunningMeanStd};
+use crate::optim::Adam;
+
+/// The `format` tag of our files.
+pub const FORMAT: &str = "snakesim-ppo";
+/// The version of the layout described above.
+pub const FORMAT_VERSION: &str = "1";
+
+/// A model file that cannot be used; the message says which file and why.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ModelError(pub String);
+
+/// What a policy acts on: the snake and the env's keywords.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvSpec {
+    /// Joints N.
+    pub joints: usize,
+    /// The robot preset.
+    pub preset: Preset,
+    /// The other env keywords (as the run's `env` table).
+    pub env: Map<String, Value>,
+}
+
+impl EnvSpec {
+    /// The resolved env configuration.
+    pub fn config(&self) -> Result<EnvConfig, crate::config::ConfigError> {
+        crate::config::env_config(self.joints, self.preset, &self.env, "env")
+    }
+}
+
+/// A trained policy: network, parameters, observation statistics and its env.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedPolicy {
+    /// The network.
+    pub net: ActorCritic,
+    /// Its parameters (layout [`ActorCritic::tensors`]).
+    pub params: Vec<f32>,
+    /// Observation statistics when the policy acts on normalised observations.
+    pub obs_rms: Option<RunningMeanStd>,
+    /// The env it was trained in.
+    pub env: EnvSpec,
+    /// Timesteps it was trained for.
+    pub timesteps: u64,
+}
+
+/// The state a run resumes from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint {
+    /// The policy.
+    pub policy: SavedPolicy,
+    /// Adam's state.
+    pub adam: Adam,
+    /// Observation and return statistics (runs with `normalize: true`).
+    pub normalizer: Option<Normalizer>,
+    /// The generator of actions and minibatches.
+    pub rng: ChaCha12Rng,
+    /// Updates done.
+    pub n_updates: u64,
+    /// Wall time of the run so far, seconds.
+    pub wall_time: f64,
+    /// Why it was written (`periodic`, `final`, `interrupt`, `non-finite`).
+    pub reason: String,
+}
+
+fn f32_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn f64_bytes(v: &[f64]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename, so that a failure never leaves a
+/// truncated file behind (nor destroys an older one).
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
+    let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+struct Entry {
+    name: String,
+    dtype: Dtype,
+    shape: Vec<usize>,
+    data: Vec<u8>,
+}
+
+fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
+    let mut entries: Vec<Entry> = p
+        .net
+        .tensors()
+        .into_iter()
+        .map(|t| Entry {
+            data: f32_bytes(&p.params[t.offset..t.offset + t.len()]),
+            name: t.name,
+            dtype: Dtype::F32,
+            shape: t.shape,
+        })
+        .collect();
+    if let Some(rms) = &p.obs_rms {
+        for (name, v) in [("obs_rms.mean", &rms.mean), ("obs_rms.var", &rms.var)] {
+            entries.push(Entry {
+                name: name.into(),
+                dtype: Dtype::F64,
+                shape: vec![v.len()],
+                data: f64_bytes(v),
+            });
+        }
+    }
+    let config = p.env.config().ok();
+    let mut meta: HashMap<String, String> = [
+        ("format", FORMAT.to_owned()),
+        ("format_version", FORMAT_VERSION.to_owned()),
+        ("arch", p.net.arch().name().to_owned()),
+        ("obs_dim", p.net.obs_dim().to_string()),
+        ("act_dim", p.net.act_dim().to_string()),
+        ("joints", p.env.joints.to_string()),
+        ("preset", p.env.preset.name().to_owned()),
+        ("env", Value::Object(p.env.env.clone()).to_string()),
+        ("normalize", p.obs_rms.is_some().to_string()),
+        ("timesteps", p.timesteps.to_string()),
+        ("snakesim_version", env!("CARGO_PKG_VERSION").to_owned()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_owned(), v))
+    .collect();
+    if let Some(c) = config {
+        meta.insert(
+            "env_config".into(),
+            serde_json::to_string(&c).expect("serialises"),
+        );
+        meta.insert("observation".into(), c.observation.name().to_owned());
+        meta.insert(
+            "action".into(),
+            format!(
+                "{} joint targets in [-1, 1] x action_scale {} rad, head to tail",
+                c.joints(),
+                c.action_scale
+            ),
+        );
+    }
+    if let Some(rms) = &p.obs_rms {
+        meta.insert("obs_rms.count".into(), format!("{:?}", rms.count));
+    }
+    (entries, meta)
+}
+
+fn serialize(entries: &[Entry], meta: HashMap<String, String>) -> Vec<u8> {
+    let views: Vec<(String, safetensors::tensor::TensorView<'_>)> = entries
+        .iter()
+        .map(|e| {
+            let view = safetensors::tensor::TensorView::new(e.dtype, e.shape.clone(), &e.data)
+                .expect("tensor sizes match their shapes");
+            (e.name.clone(), view)
+        })
+        .collect();
+    safetensors::serialize(views, Some(meta)).expect("tensors serialise")
+}
+
+/// Writes a policy file.
+pub fn save_policy(path: &Path, policy: &SavedPolicy) -> std::io::Result<()> {
+    let (entries, meta) = policy_entries(policy);
+    write_atomically(path, &serialize(&entries, meta))
+}
+
+/// Writes a checkpoint.
+pub fn save_checkpoint(path: &Path, c: &Checkpoint) -> std::io::Result<()> {
+    let (mut entries, mut meta) = policy_entries(&c.policy);
+    let n = c.policy.net.len();
+    for (name, v) in [
+        ("adam.exp_avg", &c.adam.exp_avg),
+        ("adam.exp_avg_sq", &c.adam.exp_avg_sq),
+    ] {
+        entries.push(Entry {
+            name: name.into(),
+            dtype: Dtype::F32,
+            shape: vec![n],
+            data: f32_bytes(v),
+        });
+    }
+    meta.insert("adam.step".into(), c.adam.step.to_string());
+    if let Some(norm) = &c.normalizer {
+        for (name, v) in [
+            ("ret_rms.mean", &norm.ret_rms.mean),
+            ("ret_rms.var", &norm.ret_rms.var),
+        ] {
+            entries.push(Entry {
+                name: name.into(),
+                dtype: Dtype::F64,
+                shape: vec![v.len()],
+                data: f64_bytes(v),
+            });
+        }
+        meta.insert("ret_rms.count".into(), format!("{:?}", norm.ret_rms.count));
+        meta.insert("normalize.gamma".into(), format!("{:?}", norm.gamma));
+    }
+    meta.insert(
+        "rng".into(),
+        serde_json::to_string(&c.rng).expect("the generator serialises"),
+    );
+    meta.insert("n_updates".into(), c.n_updates.to_string());
+    meta.insert("wall_time".into(), format!("{:?}", c.wall_time));
+    meta.insert("reason".into(), c.reason.clone());
+    write_atomically(path, &serialize(&entries, meta))
+}
+
+/// A parsed file: its tensors and metadata.
+struct Parsed<'a> {
+    path: &'a Path,
+    tensors: SafeTensors<'a>,
+    meta: HashMap<String, String>,
+}
+
+impl<'a> Parsed<'a> {
+    fn new(path: &'a Path, bytes: &'a [u8]) -> Result<Self, ModelError> {
+        let bad =
+            |why: String| ModelError(format!("{} is not a snakesim model: {why}", path.display()));
+        let (_, metadata) = SafeTensors::read_metadata(bytes)
+            .map_err(|e| bad(format!("corrupt or truncated safetensors file ({e})")))?;
+        let tensors = SafeTensors::deserialize(bytes)
+            .map_err(|e| bad(format!("corrupt or truncated safetensors file ({e})")))?;
+        let meta = metadata.metadata().clone().unwrap_or_default();
+        match meta.get("format").map(String::as_str) {
+            Some(FORMAT) => {}
+            Some(other) => return Err(bad(format!("its format is '{other}', not '{FORMAT}'"))),
+            None => return Err(bad("it has no 'format' metadata".into())),
+        }
+        if meta.get("format_version").map(String::as_str) != Some(FORMAT_VERSION) {
+            return Err(bad(format!(
+                "format version {:?} is not {FORMAT_VERSION} (made by another snakesim version)",
+                meta.get("format_version")
+            )));
+        }
+        Ok(Parsed {
+            path,
+            tensors,
+            meta,
+        })
+    }
+
+    fn error(&self, why: impl std::fmt::Display) -> ModelError {
+        ModelError(format!("{}: {why}", self.path.display()))
+    }
+
+    fn meta(&self, key: &str) -> Result<&str, ModelError> {
+        self.meta
+            .get(key)
+            .map(String::as_str)
+            .ok_or_else(|| self.error(format!("metadata '{key}' is missing")))
+    }
+
+    fn parse<T: std::str::FromStr>(&self, key: &str) -> Result<T, ModelError> {
+        let text = self.meta(key)?;
+        text.parse()
+            .map_err(|_| self.error(format!("metadata '{key}' = '{text}' is not valid")))
+    }
+
+    fn values<T, const B: usize>(
+        &self,
+        name: &str,
+        dtype: Dtype,
+        len: usize,
+        from: fn([u8; B]) -> T,
+    ) -> Result<Vec<T>, ModelError> {
+        let view = self
+            .tensors
+            .tensor(name)
+            .map_err(|_| self.error(format!("tensor '{name}' is missing")))?;
+        if view.dtype() != dtype {
+            return Err(self.error(format!(
+                "tensor '{name}' is {:?}, expected {dtype:?}",
+                view.dtype()
+            )));
+        }
+        let count: usize = view.shape().iter().product();
+        if count != len {
+            return Err(self.error(format!(
+                "tensor '{name}' has shape {:?} ({count} values), expected {len}",
+                view.shape()
+            )));
+        }
+        Ok(view
+            .data()
+            .chunks_exact(B)
+            .map(|c| from(c.try_into().expect("chunk of B bytes")))
+            .collect())
+    }
+
+    fn f32s(&self, name: &str, len: usize) -> Result<Vec<f32>, ModelError> {
+        let v = self.values(name, Dtype::F32, len, f32::from_le_bytes)?;
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(self.error(format!("tensor '{name}' holds non-finite values")));
+        }
+        Ok(v)
+    }
+
+    fn f64s(&self, name: &str, len: usize) -> Result<Vec<f64>, ModelError> {
+        let v = self.values(name, Dtype::F64, len, f64::from_le_bytes)?;
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(self.error(format!("tensor '{name}' holds non-finite values")));
+        }
+        Ok(v)
+    }
+
+    fn policy(&self) -> Result<SavedPolicy, ModelError> {
+        let arch: Arch = self
+            .meta("arch")?
+            .parse()
+            .map_err(|e: String| self.error(e))?;
+        let obs_dim: usize = self.parse("obs_dim")?;
+        let act_dim: usize = self.parse("act_dim")?;
+        let joints: usize = self.parse("joints")?;
+        let preset: Preset = self
+            .meta("preset")?
+            .parse()
+            .map_err(|e: snake_core::Error| self.error(e))?;
+        let env: Map<String, Value> = serde_json::from_str(self.meta("env")?)
+            .map_err(|e| self.error(format!("metadata 'env' is not a JSON mapping ({e})")))?;
+        let spec = EnvSpec {
+            joints,
+            preset,
+            env,
+        };
+        let config = spec
+            .config()
+            .map_err(|e| self.error(format!("its env does not build: {e}")))?;
+        if (config.observation_dim(), config.joints()) != (obs_dim, act_dim) {
+            return Err(self.error(format!(
+                "its env has {} observations and {} actions, but the network has {obs_dim} and {act_dim}",
+                config.observation_dim(),
+                config.joints()
+            )));
+        }
+        if obs_dim == 0 || obs_dim > 1 << 16 || act_dim == 0 || act_dim > 1 << 16 {
+            return Err(self.error(format!(
+                "implausible sizes obs_dim {obs_dim}, act_dim {act_dim}"
+            )));
+        }
+        let net = ActorCritic::new(arch, obs_dim, act_dim);
+        let mut params = vec![0.0f32; net.len()];
+        for t in net.tensors() {
+            let v = self.f32s(&t.name, t.len())?;
+            params[t.offset..t.offset + t.len()].copy_from_slice(&v);
+        }
+        let normalize: bool = self.parse("normalize")?;
+        let obs_rms = if normalize {
+            Some(RunningMeanStd {
+                mean: self.f64s("obs_rms.mean", obs_dim)?,
+                var: self.f64s("obs_rms.var", obs_dim)?,
+                count: self.parse("obs_rms.count")?,
+            })
+        } else {
+            None
+        };
+        Ok(SavedPolicy {
+            net,
+            params,
+            obs_rms,
+            env: spec,
+            timesteps: self.parse("timesteps")?,
+        })
+    }
+}
+
+fn read(path: &Path) -> Result<Vec<u8>, ModelError> {
+    std::fs::read(path).map_err(|e| ModelError(format!("cannot read {}: {e}", path.display())))
+}
+
+/// Reads a policy file (or the policy of a checkpoint).
+pub fn load_policy(path: &Path) -> Result<SavedPolicy, ModelError> {
+    let bytes = read(path)?;
+    Parsed::new(path, &bytes)?.policy()
+}
+
+/// Reads a checkpoint.
+pub fn load_checkpoint(path: &Path) -> Result<Checkpoint, ModelError> {
+    let bytes = read(path)?;
+    let p = Parsed::new(path, &bytes)?;
+    let policy = p.policy()?;
+    let n = policy.net.len();
+    let mut adam = Adam::new(n);
+    adam.exp_avg = p.f32s("adam.exp_avg", n)?;
+    adam.exp_avg_sq = p.f32s("adam.exp_avg_sq", n)?;
+    adam.step = p.parse("adam.step")?;
+    let normalizer = match &policy.obs_rms {
+        None => None,
+        Some(obs_rms) => {
+            let gamma: f64 = p.parse("normalize.gamma")?;
+            let mut norm = Normalizer::new(policy.net.obs_dim(), 0, gamma);
+            norm.obs_rms = obs_rms.clone();
+            norm.ret_rms = RunningMeanStd {
+                mean: p.f64s("ret_rms.mean", 1)?,
+                var: p.f64s("ret_rms.var", 1)?,
+                count: p.parse("ret_rms.count")?,
+            };
+            Some(norm)
+        }
+    };
+    let rng: ChaCha12Rng = serde_json::from_str(p.meta("rng")?)
+        .map_err(|e| p.error(format!("metadata 'rng' is not a generator state ({e})")))?;
+    Ok(Checkpoint {
+        adam,
+        normalizer,
+        rng,
+        n_updates: p.parse("n_updates")?,
+        wall_time: p.parse("wall_time")?,
+        reason: p.meta("reason")?.to_owned(),
+        policy,
+    })
+}

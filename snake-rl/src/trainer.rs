@@ -1,0 +1,733 @@
+//! The training loop: SB3's `OnPolicyAlgorithm.learn` for PPO, with the run directory around it.
+//!
+//! Each iteration collects `n_steps` steps of every env (actions sampled from the policy, clipped
+//! to [-1, 1] for the env, stored unclipped; a truncated episode's last reward gains `gamma` times
+//! the value of its final observation), computes GAE, and runs one PPO update. Evaluations and
+//! checkpoints follow the first update at or past each multiple of their frequency, so that the row
+//! or checkpoint labelled T holds a policy trained on exactly T timesteps (SB3's callbacks evaluate
+//! inside the rollout instead, before its update). Stopping on request saves the state of the last
+//! complete update; resuming starts the next rollout there. Everything runs on one thread pool of `threads` threads: the envs step in parallel, and each
+//! minibatch's gradient is split across the threads. A seed and a thread count give one run, bit for
+//! bit.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha12Rng;
+use serde_json::{json, Map, Value};
+use snake_core::{EnvConfig, VecSnakeEnv};
+
+use crate::buffer::RolloutBuffer;
+use crate::config::{RunConfig, TrainerKind};
+use crate::evaluate::{run_episodes, summarize, EvalError};
+use crate::model::{self, Checkpoint, EnvSpec, SavedPolicy};
+use crate::nn::{init_params, ActorCritic, Workspace};
+use crate::normalize::Normalizer;
+use crate::policy::Policy;
+use crate::ppo::{act, Learner, LossScratch, LossSettings, UpdateSettings, UpdateStats};
+use crate::rundir::{EvaluationRow, RunDir, MODEL_FILE};
+use crate::tensorboard::EventWriter;
+
+/// Why training stopped with an error. Every message is one line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TrainError {
+    /// The configuration or the run directory cannot be used.
+    #[error("{0}")]
+    Setup(String),
+    /// Writing the run's files failed.
+    #[error("{0}")]
+    Io(String),
+    /// An env failed (the simulation blew up or refused a value).
+    #[error("env: {0}")]
+    Env(#[from] snake_core::Error),
+    /// A loss or gradient became NaN or infinite; the last good state was saved.
+    #[error("{0}")]
+    NonFinite(String),
+}
+
+impl From<crate::rundir::RunDirError> for TrainError {
+    fn from(e: crate::rundir::RunDirError) -> Self {
+        TrainError::Io(e.0)
+    }
+}
+
+/// How a training session ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// The run reached its timesteps.
+    Finished(Summary),
+    /// Stopped on request (Ctrl-C); a checkpoint was saved.
+    Interrupted(Summary, PathBuf),
+}
+
+/// What a session did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// The run directory.
+    pub run_dir: PathBuf,
+    /// Timesteps at the start of this session (0, or the checkpoint resumed from).
+    pub start_timesteps: u64,
+    /// Timesteps at the end.
+    pub timesteps: u64,
+    /// Wall seconds of this session (evaluations included).
+    pub seconds: f64,
+    /// Of which evaluating.
+    pub eval_seconds: f64,
+    /// Of which collecting rollouts (env steps and policy inference).
+    pub rollout_seconds: f64,
+    /// Of which updating.
+    pub update_seconds: f64,
+    /// The last evaluation.
+    pub last_evaluation: Option<EvaluationRow>,
+    /// Resident memory at the start and the end of the session, MiB.
+    pub rss_mib: (f64, f64),
+    /// Threads used.
+    pub threads: usize,
+}
+
+impl Summary {
+    /// Timesteps per wall second of this session.
+    pub fn timesteps_per_second(&self) -> f64 {
+        (self.timesteps - self.start_timesteps) as f64 / self.seconds.max(1e-9)
+    }
+
+    /// The same without the evaluations' time.
+    pub fn training_timesteps_per_second(&self) -> f64 {
+        (self.timesteps - self.start_timesteps) as f64
+            / (self.seconds - self.eval_seconds).max(1e-9)
+    }
+}
+
+/// Progress after each update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Timesteps so far.
+    pub timesteps: u64,
+    /// The run's total.
+    pub total: u64,
+    /// Timesteps per second of this session, evaluations excluded.
+    pub timesteps_per_second: f64,
+    /// Mean return of the last 100 training episodes.
+    pub ep_rew_mean: Option<f64>,
+    /// Success rate of the last 100 training episodes.
+    pub ep_success_rate: Option<f64>,
+    /// The update's statistics.
+    pub update: UpdateStats,
+    /// Seconds of the last rollout and update.
+    pub rollout_seconds: f64,
+    /// See `rollout_seconds`.
+    pub update_seconds: f64,
+}
+
+/// Receives what happens during training; every method has a default that does nothing.
+pub trait Observer {
+    /// Training starts at `start` of `total` timesteps.
+    fn on_start(&mut self, _start: u64, _total: u64) {}
+    /// After every env step (of all envs); a cheap place to move a progress bar.
+    fn on_step(&mut self, _timesteps: u64) {}
+    /// After every update.
+    fn on_update(&mut self, _progress: &Progress) {}
+    /// After every evaluation.
+    fn on_evaluation(&mut self, _row: &EvaluationRow) {}
+    /// Asked between env steps: true stops training (a checkpoint is saved first).
+    fn should_stop(&mut self) -> bool {
+        false
+    }
+}
+
+/// An observer that does nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Observer for Silent {}
+
+/// Resident set size of this process, MiB (0 where /proc is missing).
+pub fn rss_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(0.0, |kib| kib / 1024.0)
+}
+
+/// The versions a native run records in versions.json (callers add their own, e.g. Python's).
+pub fn native_versions() -> Map<String, Value> {
+    let mut m = Map::new();
+    m.insert("snakesim".into(), json!(env!("CARGO_PKG_VERSION")));
+    m.insert("trainer".into(), json!("native"));
+    m.insert("snake_rl".into(), json!(env!("CARGO_PKG_VERSION")));
+    m.insert(
+        "target".into(),
+        json!(format!(
+            "{}-{}",
+            std::env::consts::ARCH,
+            std::env::consts::OS
+        )),
+    );
+    m
+}
+
+/// How to start: a new run, or resuming one.
+#[derive(Debug, Clone)]
+pub struct Session {
+    /// The configuration (for a resumed run: the saved one with the allowed changes).
+    pub config: RunConfig,
+    /// The run directory.
+    pub run_dir: PathBuf,
+    /// Continue the run from its latest checkpoint.
+    pub resume: bool,
+    /// Versions to record besides [`native_versions`].
+    pub versions: Map<String, Value>,
+}
+
+/// Checks a session before anything is written: a new run's directory must be free; a resumed run
+/// must have a checkpoint below its timesteps, and may not change what it learns. Returns the
+/// configuration to train with and, when resuming, the checkpoint.
+pub fn prepare(
+    config: &RunConfig,
+    run_dir: &Path,
+    resume: bool,
+) -> Result<(RunConfig, Option<(u64, PathBuf)>), TrainError> {
+    if config.trainer != TrainerKind::Native {
+        return Err(TrainError::Setup(format!(
+            "trainer {} is not the native trainer (run it with `snakesim train`)",
+            config.trainer.name()
+        )));
+    }
+    config.validate().map_err(|e| TrainError::Setup(e.0))?;
+    if !resume {
+        if run_dir.exists()
+            && (!run_dir.is_dir() || run_dir.read_dir().map_or(true, |mut d| d.next().is_some()))
+        {
+            return Err(TrainError::Setup(format!(
+                "run directory {} already exists and is not empty: pass --resume to continue it, or \
+                 choose another --run-dir",
+                run_dir.display()
+            )));
+        }
+        return Ok((config.resolved(), None));
+    }
+    let (dir, saved) = RunDir::open(run_dir).map_err(|e| TrainError::Setup(e.0))?;
+    let config = config.resolved();
+    if let Some((key, was, now)) = saved.resolved().identity_difference(&config) {
+        return Err(TrainError::Setup(format!(
+            "cannot change {key} when resuming ({} has {was}, got {now})",
+            run_dir.display()
+        )));
+    }
+    let Some((steps, path)) = dir.checkpoints().pop() else {
+        return Err(TrainError::Setup(format!(
+            "cannot resume {}: it has no native checkpoints",
+            run_dir.display()
+        )));
+    };
+    if steps >= config.timesteps {
+        return Err(TrainError::Setup(format!(
+            "{} already has {steps} timesteps (>= timesteps {}); pass a larger --timesteps to train on",
+            run_dir.display(),
+            config.timesteps
+        )));
+    }
+    Ok((config, Some((steps, path))))
+}
+
+/// Trains: the run described by `session`, reporting to `observer`.
+pub fn train(session: &Session, observer: &mut dyn Observer) -> Result<Outcome, TrainError> {
+    let (config, resume_from) = prepare(&session.config, &session.run_dir, session.resume)?;
+    let threads = config
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let pool = std::sync::Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("snake-rl-{i}"))
+            .build()
+            .map_err(|e| TrainError::Setup(format!("cannot start {threads} threads: {e}")))?,
+    );
+    let checkpoint = match &resume_from {
+        Some((_, path)) => Some(model::load_checkpoint(path).map_err(|e| TrainError::Setup(e.0))?),
+        None => None,
+    };
+    let mut versions = native_versions();
+    versions.extend(session.versions.clone());
+    let dir = if let Some((steps, _)) = &resume_from {
+        let (dir, _) = RunDir::open(&session.run_dir).map_err(|e| TrainError::Setup(e.0))?;
+        dir.keep_evaluations_up_to(*steps)?;
+        dir.note_resume_versions(*steps, &versions)?;
+        dir
+    } else {
+        RunDir::create(&session.run_dir, &config, &versions)?
+    };
+    let mut run = Run::new(config, dir, threads, checkpoint)?;
+    // The loop itself stays on the caller's thread (a Python caller checks for Ctrl-C there; only the
+    // main thread can), the envs and the updates use the pool.
+    run.train(&pool, observer)
+}
+
+/// The state of one training session.
+struct Run {
+    config: RunConfig,
+    env_config: EnvConfig,
+    dir: RunDir,
+    threads: usize,
+    learner: Learner,
+    normalizer: Option<Normalizer>,
+    rng: ChaCha12Rng,
+    timesteps: u64,
+    start_timesteps: u64,
+    n_updates: u64,
+    wall_offset: f64,
+    started: Instant,
+    eval_seconds: f64,
+    rollout_seconds: f64,
+    update_seconds: f64,
+    tb: EventWriter,
+    episodes: std::collections::VecDeque<(f64, u64, bool)>,
+    last_evaluation: Option<EvaluationRow>,
+    rss_start: f64,
+}
+
+impl Run {
+    fn new(
+        config: RunConfig,
+        dir: RunDir,
+        threads: usize,
+        checkpoint: Option<Checkpoint>,
+    ) -> Result<Self, TrainError> {
+        let env_config = config.env_config().map_err(|e| TrainError::Setup(e.0))?;
+        let (obs_dim, act_dim) = (env_config.observation_dim(), env_config.joints());
+        let net = ActorCritic::new(config.arch, obs_dim, act_dim);
+        let tb = EventWriter::create(&dir.tensorboard_dir()).map_err(|e| {
+            TrainError::Io(format!(
+                "cannot write TensorBoard logs in {}: {e}",
+                dir.path().display()
+            ))
+        })?;
+        let (learner, normalizer, rng, timesteps, n_updates, wall_offset) = match checkpoint {
+            Some(c) => {
+                if c.policy.net != net {
+                    return Err(TrainError::Setup(format!(
+                        "the checkpoint's network ({} for {} observations and {} actions) does not fit the run's",
+                        c.policy.net.arch(),
+                        c.policy.net.obs_dim(),
+                        c.policy.net.act_dim()
+                    )));
+                }
+                let mut learner = Learner::new(net, c.policy.params, threads);
+                learner.adam = c.adam;
+                let normalizer = c.normalizer.map(|mut n| {
+                    n.reset_returns(config.n_envs);
+                    n
+                });
+                (
+                    learner,
+                    normalizer,
+                    c.rng,
+                    c.policy.timesteps,
+                    c.n_updates,
+                    c.wall_time,
+                )
+            }
+            None => {
+                let mut rng = ChaCha12Rng::seed_from_u64(config.seed);
+                let params = init_params(&net, &mut rng);
+                let normalizer = config
+                    .normalize
+                    .then(|| Normalizer::new(obs_dim, config.n_envs, config.ppo.gamma));
+                (
+                    Learner::new(net, params, threads),
+                    normalizer,
+                    rng,
+                    0,
+                    0,
+                    0.0,
+                )
+            }
+        };
+        Ok(Run {
+            env_config,
+            dir,
+            threads,
+            learner,
+            normalizer,
+            rng,
+            start_timesteps: timesteps,
+            timesteps,
+            n_updates,
+            wall_offset,
+            started: Instant::now(),
+            eval_seconds: 0.0,
+            rollout_seconds: 0.0,
+            update_seconds: 0.0,
+            tb,
+            episodes: std::collections::VecDeque::with_capacity(100),
+            last_evaluation: None,
+            rss_start: rss_mib(),
+            config,
+        })
+    }
+
+    fn wall_time(&self) -> f64 {
+        self.wall_offset + self.started.elapsed().as_secs_f64()
+    }
+
+    fn saved_policy(&self) -> SavedPolicy {
+        SavedPolicy {
+            net: self.learner.net().clone(),
+            params: self.learner.params.clone(),
+            obs_rms: self.normalizer.as_ref().map(|n| n.obs_rms.clone()),
+            env: EnvSpec {
+                joints: self.config.joints,
+                preset: self.config.preset,
+                env: self.config.env.clone(),
+            },
+            timesteps: self.timesteps,
+        }
+    }
+
+    fn save_checkpoint(&self, reason: &str) -> Result<PathBuf, TrainError> {
+        let path = self.dir.checkpoint_path(self.timesteps);
+        let c = Checkpoint {
+            policy: self.saved_policy(),
+            adam: self.learner.adam.clone(),
+            normalizer: self.normalizer.clone(),
+            rng: self.rng.clone(),
+            n_updates: self.n_updates,
+            wall_time: self.wall_time(),
+            reason: reason.into(),
+        };
+        model::save_checkpoint(&path, &c).map_err(|e| {
+            TrainError::Io(format!("cannot write checkpoint {}: {e}", path.display()))
+        })?;
+        self.dir
+            .write_checkpoint_note(self.timesteps, c.wall_time, reason)?;
+        Ok(path)
+    }
+
+    fn save_final(&self) -> Result<PathBuf, TrainError> {
+        let path = self.dir.path().join(MODEL_FILE);
+        model::save_policy(&path, &self.saved_policy())
+            .map_err(|e| TrainError::Io(format!("cannot write {}: {e}", path.display())))?;
+        Ok(path)
+    }
+
+    fn log(&mut self, values: &[(&str, f64)]) -> Result<(), TrainError> {
+        self.tb
+            .scalars(self.timesteps, values)
+            .and_then(|()| self.tb.flush())
+            .map_err(|e| TrainError::Io(format!("cannot write TensorBoard logs: {e}")))
+    }
+
+    /// Evaluates the current policy; false when interrupted.
+    fn evaluate(&mut self, observer: &mut dyn Observer) -> Result<bool, TrainError> {
+        let start = Instant::now();
+        let mut policy = Policy::new(
+            self.learner.net().clone(),
+            self.learner.params.clone(),
+            self.normalizer.as_ref().map(|n| n.obs_rms.clone()),
+        );
+        let episodes = match run_episodes(
+            &mut policy,
+            &self.env_config,
+            self.config.eval_episodes,
+            self.config.eval_seed(),
+            true,
+            &mut || observer.should_stop(),
+        ) {
+            Ok(e) => e,
+            Err(EvalError::Interrupted) => return Ok(false),
+            Err(EvalError::Env(e)) => return Err(TrainError::Env(e)),
+        };
+        let s = summarize(&episodes);
+        let row = EvaluationRow {
+            timesteps: self.timesteps,
+            mean_return: s.mean_return,
+            std_return: s.std_return,
+            success_rate: s.success_rate,
+            mean_steps_to_goal: s.mean_steps_to_goal,
+            wall_time: (self.wall_time() * 1000.0).round() / 1000.0,
+        };
+        self.dir.append_evaluation(&row)?;
+        let mut values = vec![
+            ("eval/mean_reward", s.mean_return),
+            ("eval/std_reward", s.std_return),
+            ("eval/success_rate", s.success_rate),
+            ("eval/mean_ep_length", s.mean_length),
+            ("eval/mean_speed", s.mean_speed),
+        ];
+        if let Some(steps) = s.mean_steps_to_goal {
+            values.push(("eval/mean_steps_to_goal", steps));
+        }
+        self.log(&values)?;
+        self.last_evaluation = Some(row);
+        observer.on_evaluation(&row);
+        self.eval_seconds += start.elapsed().as_secs_f64();
+        Ok(true)
+    }
+
+    fn summary(&self) -> Summary {
+        Summary {
+            run_dir: self.dir.path().to_path_buf(),
+            start_timesteps: self.start_timesteps,
+            timesteps: self.timesteps,
+            seconds: self.started.elapsed().as_secs_f64(),
+            eval_seconds: self.eval_seconds,
+            rollout_seconds: self.rollout_seconds,
+            update_seconds: self.update_seconds,
+            last_evaluation: self.last_evaluation,
+            rss_mib: (self.rss_start, rss_mib()),
+            threads: self.threads,
+        }
+    }
+
+    fn interrupted(&mut self, trained: u64) -> Result<Outcome, TrainError> {
+        // The partial rollout is dropped: the saved state is that of the last complete update.
+        self.timesteps = trained;
+        let path = self.save_checkpoint("interrupt")?;
+        self.save_final()?;
+        Ok(Outcome::Interrupted(self.summary(), path))
+    }
+
+    fn train(
+        &mut self,
+        pool: &std::sync::Arc<rayon::ThreadPool>,
+        observer: &mut dyn Observer,
+    ) -> Result<Outcome, TrainError> {
+        let c = self.config.clone();
+        let (m, n, d) = (
+            c.n_envs,
+            self.env_config.joints(),
+            self.env_config.observation_dim(),
+        );
+        // One env after the other on one thread; otherwise on the pool the updates use too.
+        let mut envs = VecSnakeEnv::new(self.env_config.clone(), m)?;
+        envs = if self.threads == 1 {
+            envs.with_threads(1)?
+        } else {
+            envs.with_pool(pool.clone())
+        };
+        let net = self.learner.net().clone();
+        let mut buffer = RolloutBuffer::new(c.ppo.n_steps, m, d, n);
+        let mut ws: Workspace = net.workspace(m);
+        let mut scratch = LossScratch::default();
+        let mut raw_obs = vec![0.0f32; m * d];
+        // A resumed run starts new episodes, seeded apart from the ones seen before (as SB3 resumes).
+        envs.reset(Some(c.seed.wrapping_add(self.timesteps)), &mut raw_obs)?;
+        let mut obs = raw_obs.clone();
+        if let Some(norm) = &mut self.normalizer {
+            norm.obs_rms.update(&raw_obs, m);
+            norm.reset_returns(m);
+            norm.normalize_obs(&mut obs);
+        }
+        let mut episode_starts = vec![true; m];
+        let (mut actions, mut clipped) = (vec![0.0f32; m * n], vec![0.0f32; m * n]);
+        let (mut values, mut log_probs) = (vec![0.0f32; m], vec![0.0f32; m]);
+        let (mut rewards64, mut rewards) = (vec![0.0f64; m], vec![0.0f32; m]);
+        let (mut terminated, mut truncated, mut dones) =
+            (vec![false; m], vec![false; m], vec![false; m]);
+        let mut terminal = vec![0.0f32; d];
+        // The next multiple of `freq` after `t` (never, for 0).
+        let every = |freq: u64, t: u64| t.checked_div(freq).map_or(u64::MAX, |k| (k + 1) * freq);
+        let mut next_eval = every(c.eval_freq, self.timesteps);
+        let mut next_checkpoint = every(c.checkpoint_freq, self.timesteps);
+        let mut last_eval_at = None;
+        observer.on_start(self.timesteps, c.timesteps);
+        let gamma32 = c.ppo.gamma as f32;
+
+        while self.timesteps < c.timesteps {
+            let rollout_start = Instant::now();
+            let trained = self.timesteps;
+            buffer.reset();
+            for _ in 0..c.ppo.n_steps {
+                if observer.should_stop() {
+                    return self.interrupted(trained);
+                }
+                act::sample(
+                    &net,
+                    &self.learner.params,
+                    &obs,
+                    m,
+                    &mut self.rng,
+                    &mut ws,
+                    &mut scratch,
+                    &mut actions,
+                    &mut values,
+                    &mut log_probs,
+                );
+                act::clip_to_action_space(&actions, &mut clipped);
+                let finals = envs.step(
+                    &clipped,
+                    &mut raw_obs,
+                    &mut rewards64,
+                    &mut terminated,
+                    &mut truncated,
+                )?;
+                self.timesteps += m as u64;
+                for i in 0..m {
+                    rewards[i] = rewards64[i] as f32;
+                    dones[i] = terminated[i] || truncated[i];
+                }
+                // The finished episodes: statistics, and the final observations of truncated ones.
+                let mut bootstrap: Vec<(usize, Vec<f32>)> = Vec::new();
+                for f in finals.iter() {
+                    if self.episodes.len() == 100 {
+                        self.episodes.pop_front();
+                    }
+                    self.episodes.push_back((
+                        f.info.episode_return,
+                        f.info.episode_step,
+                        f.info.success,
+                    ));
+                    if truncated[f.env] && !terminated[f.env] {
+                        bootstrap.push((f.env, f.observation.to_vec()));
+                    }
+                }
+                let mut next_obs = raw_obs.clone();
+                if let Some(norm) = &mut self.normalizer {
+                    norm.obs_rms.update(&raw_obs, m);
+                    norm.normalize_obs(&mut next_obs);
+                    norm.normalize_rewards(&mut rewards, &dones);
+                }
+                for (env, final_obs) in bootstrap {
+                    terminal.copy_from_slice(&final_obs);
+                    if let Some(norm) = &self.normalizer {
+                        norm.normalize_obs(&mut terminal);
+                    }
+                    net.forward_value(&self.learner.params, &terminal, 1, &mut ws);
+                    rewards[env] += gamma32 * ws.value[0];
+                }
+                buffer.add(
+                    &obs,
+                    &actions,
+                    &rewards,
+                    &episode_starts,
+                    &values,
+                    &log_probs,
+                );
+                obs = next_obs;
+                episode_starts.copy_from_slice(&dones);
+                observer.on_step(self.timesteps);
+            }
+            net.forward_value(&self.learner.params, &obs, m, &mut ws);
+            let last_values = ws.value[..m].to_vec();
+            buffer.compute_returns_and_advantage(
+                &last_values,
+                &episode_starts,
+                c.ppo.gamma,
+                c.ppo.gae_lambda,
+            );
+            let rollout_seconds = rollout_start.elapsed().as_secs_f64();
+
+            let update_start = Instant::now();
+            let progress_remaining = 1.0 - self.timesteps as f64 / c.timesteps as f64;
+            let settings = UpdateSettings {
+                n_epochs: c.ppo.n_epochs,
+                batch_size: c.ppo.batch_size,
+                loss: LossSettings {
+                    clip_range: c.ppo.clip_range.at(progress_remaining) as f32,
+                    clip_range_vf: c.ppo.clip_range_vf.map(|v| v as f32),
+                    ent_coef: c.ppo.ent_coef as f32,
+                    vf_coef: c.ppo.vf_coef as f32,
+                    normalize_advantage: c.ppo.normalize_advantage,
+                },
+                max_grad_norm: c.ppo.max_grad_norm,
+                target_kl: c.ppo.target_kl,
+                learning_rate: c.ppo.learning_rate.at(progress_remaining),
+            };
+            let before = (
+                self.learner.params.clone(),
+                self.learner.adam.clone(),
+                self.rng.clone(),
+            );
+            let stats = match self
+                .learner
+                .update(&buffer, &settings, &mut self.rng, Some(pool))
+            {
+                Ok(s) => s,
+                Err(e) => {
+                    // Keep the last good state: the parameters before this update.
+                    (self.learner.params, self.learner.adam, self.rng) = before;
+                    let path = self.save_checkpoint("non-finite")?;
+                    return Err(TrainError::NonFinite(format!(
+                        "training stopped at update {} ({} timesteps): {e}; saved the state before it to {}",
+                        self.n_updates / c.ppo.n_epochs.max(1) as u64 + 1,
+                        self.timesteps,
+                        path.display()
+                    )));
+                }
+            };
+            self.n_updates += stats.epochs as u64;
+            let update_seconds = update_start.elapsed().as_secs_f64();
+            self.rollout_seconds += rollout_seconds;
+            self.update_seconds += update_seconds;
+            let busy = self.started.elapsed().as_secs_f64() - self.eval_seconds;
+            let progress = Progress {
+                timesteps: self.timesteps,
+                total: c.timesteps,
+                timesteps_per_second: (self.timesteps - self.start_timesteps) as f64
+                    / busy.max(1e-9),
+                ep_rew_mean: mean(self.episodes.iter().map(|e| e.0)),
+                ep_success_rate: mean(self.episodes.iter().map(|e| f64::from(u8::from(e.2)))),
+                update: stats,
+                rollout_seconds,
+                update_seconds,
+            };
+            let mut scalars = vec![
+                ("train/entropy_loss", stats.entropy_loss),
+                ("train/policy_gradient_loss", stats.policy_gradient_loss),
+                ("train/value_loss", stats.value_loss),
+                ("train/approx_kl", stats.approx_kl),
+                ("train/clip_fraction", stats.clip_fraction),
+                ("train/loss", stats.loss),
+                ("train/explained_variance", stats.explained_variance),
+                ("train/std", stats.std),
+                ("train/clip_range", f64::from(settings.loss.clip_range)),
+                ("train/learning_rate", settings.learning_rate),
+                ("time/fps", progress.timesteps_per_second),
+                ("time/rollout_seconds", rollout_seconds),
+                ("time/update_seconds", update_seconds),
+                ("time/rss_mib", rss_mib()),
+            ];
+            if let Some(r) = progress.ep_rew_mean {
+                scalars.push(("rollout/ep_rew_mean", r));
+                scalars.push((
+                    "rollout/ep_len_mean",
+                    mean(self.episodes.iter().map(|e| e.1 as f64)).unwrap_or(0.0),
+                ));
+                scalars.push((
+                    "rollout/success_rate",
+                    progress.ep_success_rate.unwrap_or(0.0),
+                ));
+            }
+            self.log(&scalars)?;
+            observer.on_update(&progress);
+            // After the update: the evaluation and checkpoint at T hold the policy trained on T.
+            if self.timesteps >= next_eval && self.timesteps < c.timesteps {
+                if !self.evaluate(observer)? {
+                    return self.interrupted(self.timesteps);
+                }
+                last_eval_at = Some(self.timesteps);
+                next_eval = every(c.eval_freq, self.timesteps);
+            }
+            if self.timesteps >= next_checkpoint && self.timesteps < c.timesteps {
+                self.save_checkpoint("periodic")?;
+                next_checkpoint = every(c.checkpoint_freq, self.timesteps);
+            }
+        }
+        if last_eval_at != Some(self.timesteps) && !self.evaluate(observer)? {
+            return self.interrupted(self.timesteps);
+        }
+        self.save_checkpoint("final")?;
+        self.save_final()?;
+        Ok(Outcome::Finished(self.summary()))
+    }
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, count) = values.fold((0.0, 0usize), |(s, c), v| (s + v, c + 1));
+    (count > 0).then(|| sum / count as f64)
+}
