@@ -14,5 +14,6 @@ pub mod optim;
 pub mod policy;
 pub mod ppo;
 pub mod rundir;
+pub mod simd;
 pub mod tensorboard;
 pub mod trainer;

@@ -47,18 +47,21 @@ impl Adam {
         let beta2 = self.beta2 as f32;
         let w2 = (1.0 - self.beta2) as f32;
         let eps = self.eps as f32;
-        for (((p, g), m), v) in params
-            .iter_mut()
-            .zip(grads)
-            .zip(&mut self.exp_avg)
-            .zip(&mut self.exp_avg_sq)
-        {
-            // exp_avg.lerp_(grad, 1 - beta1): torch's lerp for a weight below 0.5.
-            *m += w1 * (g - *m);
-            *v = *v * beta2 + w2 * (g * g);
-            let denom = v.sqrt() / bc2_sqrt + eps;
-            *p += -step_size * (*m / denom);
-        }
+        let (exp_avg, exp_avg_sq) = (&mut self.exp_avg, &mut self.exp_avg_sq);
+        crate::simd::dispatch(|| {
+            for (((p, g), m), v) in params
+                .iter_mut()
+                .zip(grads)
+                .zip(exp_avg.iter_mut())
+                .zip(exp_avg_sq.iter_mut())
+            {
+                // exp_avg.lerp_(grad, 1 - beta1): torch's lerp for a weight below 0.5.
+                *m += w1 * (g - *m);
+                *v = *v * beta2 + w2 * (g * g);
+                let denom = v.sqrt() / bc2_sqrt + eps;
+                *p += -step_size * (*m / denom);
+            }
+        });
     }
 }
 
@@ -69,17 +72,29 @@ impl Adam {
 pub fn clip_grad_norm(grads: &mut [f32], tensors: &[(usize, usize)], max_norm: f64) -> f32 {
     let mut total = 0.0f64;
     for &(offset, len) in tensors {
-        let norm = grads[offset..offset + len]
-            .iter()
-            .map(|&g| f64::from(g) * f64::from(g))
-            .sum::<f64>()
-            .sqrt() as f32;
+        let norm = crate::simd::dispatch(|| sum_of_squares(&grads[offset..offset + len])).sqrt() as f32;
         total += f64::from(norm) * f64::from(norm);
     }
     let total = total.sqrt() as f32;
     let coef = (max_norm as f32 / (total + 1e-6)).min(1.0);
-    for g in grads.iter_mut() {
-        *g *= coef;
-    }
+    crate::simd::dispatch(|| {
+        for g in grads.iter_mut() {
+            *g *= coef;
+        }
+    });
     total
+}
+
+/// Sum of squares in double, over 8 interleaved partial sums so that it vectorises.
+#[inline(always)]
+fn sum_of_squares(values: &[f32]) -> f64 {
+    let mut acc = [0.0f64; 8];
+    let chunks = values.chunks_exact(8);
+    let tail = chunks.remainder();
+    for c in chunks {
+        for (a, &g) in acc.iter_mut().zip(c) {
+            *a += f64::from(g) * f64::from(g);
+        }
+    }
+    acc.iter().sum::<f64>() + tail.iter().map(|&g| f64::from(g) * f64::from(g)).sum::<f64>()
 }
