@@ -1,12 +1,17 @@
-//! Time of one PPO minibatch update (forward, loss, backward, gradient clipping, Adam) with the
-//! hand-written networks: `cargo run --release -p snake-rl --example update_bench [-- BATCH ITERS]`.
+//! Time of PPO updates with the hand-written networks:
+//! `cargo run --release -p snake-rl --example update_bench [-- BATCH ITERS]`.
+//!
+//! First one minibatch update (forward, loss, backward, gradient clipping, Adam), split into its
+//! parts, on one thread; then a whole update of the paper's settings (10 epochs over a rollout of
+//! 16 envs x 4096 steps in minibatches of 64) on 1 and 2 threads.
 
 use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
+use snake_rl::buffer::RolloutBuffer;
 use snake_rl::nn::{init_params, ActorCritic, Arch};
 use snake_rl::optim::{clip_grad_norm, Adam};
-use snake_rl::ppo::{loss, LossScratch, LossSettings, Minibatch};
+use snake_rl::ppo::{loss, Learner, LossScratch, LossSettings, Minibatch, UpdateSettings};
 
 fn main() {
     let args: Vec<usize> = std::env::args()
@@ -84,6 +89,69 @@ fn main() {
         println!(
             "{arch:5} obs {obs_dim:2} act {act_dim:2} batch {rows}: {per:7.1} us/update (forward+loss {:.1}, backward {:.1}, clip {:.1}, adam {:.1}); {} params",
             us(phase[0]), us(phase[1]), us(phase[2]), us(phase[3]), net.len()
+        );
+    }
+    full_updates();
+}
+
+/// One full update of the paper's settings over a random rollout, on `threads` threads; seconds.
+fn full_update(arch: Arch, obs_dim: usize, act_dim: usize, threads: usize) -> f64 {
+    let (n_steps, n_envs) = (4096, 16);
+    let net = ActorCritic::new(arch, obs_dim, act_dim);
+    let mut rng = rand_chacha::ChaCha12Rng::seed_from_u64(1);
+    let params = init_params(&net, &mut rng);
+    let mut buffer = RolloutBuffer::new(n_steps, n_envs, obs_dim, act_dim);
+    for _ in 0..n_steps {
+        let obs: Vec<f32> = (0..n_envs * obs_dim)
+            .map(|_| rng.gen_range(-1.0..1.0))
+            .collect();
+        let act: Vec<f32> = (0..n_envs * act_dim)
+            .map(|_| rng.gen_range(-1.0..1.0))
+            .collect();
+        let r: Vec<f32> = (0..n_envs).map(|_| rng.gen_range(-1.0..0.0)).collect();
+        let lp: Vec<f32> = (0..n_envs).map(|_| rng.gen_range(-6.0..-4.0)).collect();
+        buffer.add(&obs, &act, &r, &vec![false; n_envs], &r, &lp);
+    }
+    buffer.compute_returns_and_advantage(&vec![0.0; n_envs], &vec![false; n_envs], 0.99, 0.95);
+    let settings = UpdateSettings {
+        n_epochs: 10,
+        batch_size: 64,
+        loss: LossSettings {
+            clip_range: 0.2,
+            clip_range_vf: None,
+            ent_coef: 0.0,
+            vf_coef: 0.5,
+            normalize_advantage: true,
+        },
+        max_grad_norm: 0.5,
+        target_kl: None,
+        learning_rate: 3e-4,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    let mut learner = Learner::new(net, params, threads);
+    let start = Instant::now();
+    learner
+        .update(&buffer, &settings, &mut rng, Some(&pool))
+        .expect("finite");
+    start.elapsed().as_secs_f64()
+}
+
+fn full_updates() {
+    for (arch, obs_dim, act_dim) in [
+        (Arch::Small, 12, 5),
+        (Arch::Large, 12, 5),
+        (Arch::Small, 22, 10),
+    ] {
+        let t1 = full_update(arch, obs_dim, act_dim, 1);
+        let t2 = full_update(arch, obs_dim, act_dim, 2);
+        println!(
+            "{arch:5} obs {obs_dim:2} act {act_dim:2}: full update (10,240 minibatches) {t1:.2} s on 1 thread, {t2:.2} s on 2 \
+             ({:.1} / {:.1} us per minibatch)",
+            t1 / 10240.0 * 1e6,
+            t2 / 10240.0 * 1e6
         );
     }
 }

@@ -38,16 +38,53 @@ impl Adam {
     /// the scalars in double as Python computes them, the tensor arithmetic in float32.
     pub fn step(&mut self, params: &mut [f32], grads: &[f32], lr: f64) {
         self.step += 1;
-        let t = self.step as f64;
-        let bias_correction1 = 1.0 - self.beta1.powf(t);
-        let bias_correction2 = 1.0 - self.beta2.powf(t);
-        let step_size = (lr / bias_correction1) as f32;
-        let bc2_sqrt = bias_correction2.sqrt() as f32;
-        let w1 = (1.0 - self.beta1) as f32;
-        let beta2 = self.beta2 as f32;
-        let w2 = (1.0 - self.beta2) as f32;
-        let eps = self.eps as f32;
-        let (exp_avg, exp_avg_sq) = (&mut self.exp_avg, &mut self.exp_avg_sq);
+        let step = AdamStep::new(self.hyper(), lr, self.step);
+        step.apply(params, grads, &mut self.exp_avg, &mut self.exp_avg_sq);
+    }
+
+    /// beta1, beta2 and eps.
+    pub fn hyper(&self) -> (f64, f64, f64) {
+        (self.beta1, self.beta2, self.eps)
+    }
+}
+
+/// The scalars of Adam's step number `t` (from 1) at learning rate `lr`, ready to update any range
+/// of the parameters (two threads can update two ranges of one step).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdamStep {
+    step_size: f32,
+    bc2_sqrt: f32,
+    w1: f32,
+    beta2: f32,
+    w2: f32,
+    eps: f32,
+}
+
+impl AdamStep {
+    /// Step `t` with Adam's `(beta1, beta2, eps)` at learning rate `lr`.
+    pub fn new((beta1, beta2, eps): (f64, f64, f64), lr: f64, t: u64) -> Self {
+        let t = t as f64;
+        let bias_correction1 = 1.0 - beta1.powf(t);
+        let bias_correction2 = 1.0 - beta2.powf(t);
+        AdamStep {
+            step_size: (lr / bias_correction1) as f32,
+            bc2_sqrt: bias_correction2.sqrt() as f32,
+            w1: (1.0 - beta1) as f32,
+            beta2: beta2 as f32,
+            w2: (1.0 - beta2) as f32,
+            eps: eps as f32,
+        }
+    }
+
+    /// Updates `params` and their moments from `grads` (all four of one length).
+    pub fn apply(
+        &self,
+        params: &mut [f32],
+        grads: &[f32],
+        exp_avg: &mut [f32],
+        exp_avg_sq: &mut [f32],
+    ) {
+        let s = *self;
         crate::simd::dispatch(|| {
             for (((p, g), m), v) in params
                 .iter_mut()
@@ -56,13 +93,40 @@ impl Adam {
                 .zip(exp_avg_sq.iter_mut())
             {
                 // exp_avg.lerp_(grad, 1 - beta1): torch's lerp for a weight below 0.5.
-                *m += w1 * (g - *m);
-                *v = *v * beta2 + w2 * (g * g);
-                let denom = v.sqrt() / bc2_sqrt + eps;
-                *p += -step_size * (*m / denom);
+                *m += s.w1 * (g - *m);
+                *v = *v * s.beta2 + s.w2 * (g * g);
+                let denom = v.sqrt() / s.bc2_sqrt + s.eps;
+                *p += -s.step_size * (*m / denom);
             }
         });
     }
+}
+
+/// The sum over `tensors` ((offset, length) ranges of `grads`) of their squared norms, each norm
+/// rounded to float32 as torch's `clip_grad_norm_` computes the per-tensor norms it then combines.
+pub fn squared_norms(grads: &[f32], tensors: &[(usize, usize)]) -> f64 {
+    tensors
+        .iter()
+        .map(|&(offset, len)| {
+            let norm = crate::simd::dispatch(|| sum_of_squares(&grads[offset..offset + len])).sqrt()
+                as f32;
+            f64::from(norm) * f64::from(norm)
+        })
+        .sum()
+}
+
+/// `min(1, max_norm / (total_norm + 1e-6))`: the factor `clip_grad_norm_` scales gradients by.
+pub fn clip_coefficient(total_norm: f32, max_norm: f64) -> f32 {
+    (max_norm as f32 / (total_norm + 1e-6)).min(1.0)
+}
+
+/// Multiplies every gradient by `coef`.
+pub fn scale(grads: &mut [f32], coef: f32) {
+    crate::simd::dispatch(|| {
+        for g in grads.iter_mut() {
+            *g *= coef;
+        }
+    });
 }
 
 /// `torch.nn.utils.clip_grad_norm_(max_norm)`: scales all gradients by
@@ -70,18 +134,8 @@ impl Adam {
 /// (offset, length) ranges whose norms make up the total, as torch takes the norm of the per-tensor
 /// norms.
 pub fn clip_grad_norm(grads: &mut [f32], tensors: &[(usize, usize)], max_norm: f64) -> f32 {
-    let mut total = 0.0f64;
-    for &(offset, len) in tensors {
-        let norm = crate::simd::dispatch(|| sum_of_squares(&grads[offset..offset + len])).sqrt() as f32;
-        total += f64::from(norm) * f64::from(norm);
-    }
-    let total = total.sqrt() as f32;
-    let coef = (max_norm as f32 / (total + 1e-6)).min(1.0);
-    crate::simd::dispatch(|| {
-        for g in grads.iter_mut() {
-            *g *= coef;
-        }
-    });
+    let total = squared_norms(grads, tensors).sqrt() as f32;
+    scale(grads, clip_coefficient(total, max_norm));
     total
 }
 
@@ -96,5 +150,9 @@ fn sum_of_squares(values: &[f32]) -> f64 {
             *a += f64::from(g) * f64::from(g);
         }
     }
-    acc.iter().sum::<f64>() + tail.iter().map(|&g| f64::from(g) * f64::from(g)).sum::<f64>()
+    acc.iter().sum::<f64>()
+        + tail
+            .iter()
+            .map(|&g| f64::from(g) * f64::from(g))
+            .sum::<f64>()
 }

@@ -147,11 +147,14 @@ impl ActorCritic {
     pub fn new(arch: Arch, obs_dim: usize, act_dim: usize) -> Self {
         // log_std first, as SB3's state_dict lists it.
         let log_std = 0;
+        // Buffer order: log_std, trunk, policy layers, action head, value layers, value head. The
+        // policy's parameters (with log_std) come before the value network's, so that PPO-small's two
+        // networks own two contiguous ranges that two threads can update at once (see `Branch`).
         let (shared, offset, trunk) = chain(act_dim, obs_dim, arch.shared_widths());
         let (pi, offset, pi_width) = chain(offset, trunk, arch.head_widths());
-        let (vf, offset, vf_width) = chain(offset, trunk, arch.head_widths());
         let action = Dense::at(offset, pi_width, act_dim);
-        let value = Dense::at(action.end(), vf_width, 1);
+        let (vf, offset, vf_width) = chain(action.end(), trunk, arch.head_widths());
+        let value = Dense::at(offset, vf_width, 1);
         ActorCritic {
             arch,
             obs_dim,
@@ -196,13 +199,45 @@ impl ActorCritic {
         self.log_std
     }
 
-    /// Every dense layer with its initialisation role, in buffer order.
+    /// Every dense layer with its initialisation role.
     pub fn layers(&self) -> Vec<(Dense, Role)> {
         let hidden = self.shared.iter().chain(&self.pi).chain(&self.vf);
         hidden
             .map(|d| (*d, Role::Hidden))
             .chain([(self.action, Role::ActionMean), (self.value, Role::Value)])
             .collect()
+    }
+
+    /// Without a shared trunk (PPO-small), the offset where the value network's parameters begin:
+    /// the policy (log_std, policy layers, action head) owns `[0, split)`, the value network
+    /// `[split, len)`.
+    pub fn branch_split(&self) -> Option<usize> {
+        self.shared
+            .is_empty()
+            .then(|| self.vf.first().map_or(self.value.weight, |d| d.weight))
+    }
+
+    /// PPO-small's policy network alone, over the parameter range `[0, split)`.
+    pub fn policy_branch(&self) -> Option<Branch> {
+        self.branch_split().map(|_| Branch {
+            layers: self.pi.clone(),
+            out: self.action,
+        })
+    }
+
+    /// PPO-small's value network alone, over the parameter range `[split, len)` (offsets relative to
+    /// `split`).
+    pub fn value_branch(&self) -> Option<Branch> {
+        let split = self.branch_split()?;
+        let rebase = |d: &Dense| Dense {
+            weight: d.weight - split,
+            bias: d.bias - split,
+            ..*d
+        };
+        Some(Branch {
+            layers: self.vf.iter().map(rebase).collect(),
+            out: rebase(&self.value),
+        })
     }
 
     /// The named tensors, in buffer order, with SB3's `state_dict` names.
@@ -298,25 +333,19 @@ impl ActorCritic {
         let trunk: &[f32] = shared.last().map_or(obs, |v| v.as_slice());
         let has_trunk = !self.shared.is_empty();
 
-        // Each head: its output layer, then its tanh layers from the last to the first.
         let heads = [
             (&self.pi, &*pi, self.action, &*d_mean),
             (&self.vf, &*vf, self.value, &*d_value),
         ];
         for (k, (layers, acts, out, d_out)) in heads.into_iter().enumerate() {
-            let last = acts.last().expect("heads have layers");
-            out.backward(params, last, d_out, rows, grads, Some(d_a));
-            for i in (0..layers.len()).rev() {
-                let d = layers[i];
-                tanh_backward_in_place(&mut d_a[..rows * d.outputs], &acts[i]);
-                let input = if i == 0 { trunk } else { &acts[i - 1] };
-                if i > 0 || has_trunk {
-                    d.backward(params, input, d_a, rows, grads, Some(d_b));
-                    std::mem::swap(d_a, d_b);
-                } else {
-                    d.backward(params, input, d_a, rows, grads, None);
-                }
-            }
+            let head = Head {
+                layers,
+                acts,
+                out,
+                input: trunk,
+                rows,
+            };
+            head.backward(params, d_out, grads, d_a, d_b, has_trunk);
             if has_trunk {
                 // d_a now holds dL/d(trunk) from this head; the trunk gets the sum of both heads'.
                 let n = rows * self.shared.last().map_or(0, |d| d.outputs);
@@ -343,6 +372,136 @@ impl ActorCritic {
                 }
             }
         }
+    }
+}
+
+/// One head's backward pass: its output layer, then its tanh layers from the last to the first.
+struct Head<'a> {
+    layers: &'a [Dense],
+    acts: &'a [Vec<f32>],
+    out: Dense,
+    input: &'a [f32],
+    rows: usize,
+}
+
+impl Head<'_> {
+    /// Writes the head's parameter gradients into `grads` from dL/d(output) `d_out`; with
+    /// `input_gradient`, leaves dL/d(input) in `d_a` (`d_b` is scratch).
+    fn backward(
+        &self,
+        params: &[f32],
+        d_out: &[f32],
+        grads: &mut [f32],
+        d_a: &mut Vec<f32>,
+        d_b: &mut Vec<f32>,
+        input_gradient: bool,
+    ) {
+        let rows = self.rows;
+        let last = self.acts.last().expect("heads have layers");
+        self.out
+            .backward(params, last, d_out, rows, grads, Some(d_a.as_mut_slice()));
+        for i in (0..self.layers.len()).rev() {
+            let d = self.layers[i];
+            tanh_backward_in_place(&mut d_a[..rows * d.outputs], &self.acts[i]);
+            let input = if i == 0 {
+                self.input
+            } else {
+                &self.acts[i - 1]
+            };
+            if i > 0 || input_gradient {
+                d.backward(params, input, d_a, rows, grads, Some(d_b.as_mut_slice()));
+                std::mem::swap(d_a, d_b);
+            } else {
+                d.backward(params, input, d_a, rows, grads, None);
+            }
+        }
+    }
+}
+
+/// One of PPO-small's two networks on its own (tanh layers and an output layer), over a parameter
+/// range of its own: see [`ActorCritic::policy_branch`] and [`ActorCritic::value_branch`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Branch {
+    layers: Vec<Dense>,
+    out: Dense,
+}
+
+/// Buffers of a [`Branch`]'s forward and backward passes.
+#[derive(Debug, Clone, Default)]
+pub struct BranchWorkspace {
+    rows: usize,
+    acts: Vec<Vec<f32>>,
+    /// The branch's output of the last forward pass (`rows x outputs`).
+    pub out: Vec<f32>,
+    /// dL/d(output), filled by the loss before [`Branch::backward`].
+    pub d_out: Vec<f32>,
+    d_a: Vec<f32>,
+    d_b: Vec<f32>,
+}
+
+impl Branch {
+    /// Width of the branch's output.
+    pub fn outputs(&self) -> usize {
+        self.out.outputs
+    }
+
+    fn ensure(&self, ws: &mut BranchWorkspace, rows: usize) {
+        if ws.acts.len() == self.layers.len()
+            && ws.out.len() >= rows * self.out.outputs
+            && ws.rows >= rows
+        {
+            return;
+        }
+        ws.rows = rows.max(ws.rows);
+        let rows = ws.rows;
+        ws.acts = self
+            .layers
+            .iter()
+            .map(|d| vec![0.0; rows * d.outputs])
+            .collect();
+        ws.out = vec![0.0; rows * self.out.outputs];
+        ws.d_out = vec![0.0; rows * self.out.outputs];
+        let widest = self
+            .layers
+            .iter()
+            .map(|d| d.inputs.max(d.outputs))
+            .max()
+            .unwrap_or(1);
+        ws.d_a = vec![0.0; rows * widest];
+        ws.d_b = vec![0.0; rows * widest];
+    }
+
+    /// The branch's outputs for `rows` observations, into `ws.out`.
+    pub fn forward(&self, params: &[f32], obs: &[f32], rows: usize, ws: &mut BranchWorkspace) {
+        self.ensure(ws, rows);
+        let last = tanh_chain(&self.layers, &mut ws.acts, params, obs, rows);
+        self.out.forward(params, last, rows, &mut ws.out);
+    }
+
+    /// The branch's parameter gradients from `ws.d_out`, after [`Branch::forward`] on `obs`.
+    pub fn backward(
+        &self,
+        params: &[f32],
+        obs: &[f32],
+        rows: usize,
+        ws: &mut BranchWorkspace,
+        grads: &mut [f32],
+    ) {
+        let BranchWorkspace {
+            acts,
+            d_out,
+            d_a,
+            d_b,
+            ..
+        } = ws;
+        let head = Head {
+            layers: &self.layers,
+            acts,
+            out: self.out,
+            input: obs,
+            rows,
+        };
+        head.backward(params, d_out, grads, d_a, d_b, false);
     }
 }
 

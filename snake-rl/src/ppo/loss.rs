@@ -218,12 +218,39 @@ pub fn forward(
 ) -> LossSums {
     let rows = chunk.rows;
     let n = net.act_dim();
-    let b = total_rows as f32;
     net.forward(params, chunk.obs, rows, ws);
     let log_std = &params[net.log_std_offset()..net.log_std_offset() + n];
-    gaussian_log_prob(&ws.mean, log_std, chunk.actions, rows, scratch);
+    let mut sums = policy_terms(
+        &ws.mean,
+        log_std,
+        chunk,
+        total_rows,
+        settings,
+        scratch,
+        &mut ws.d_mean,
+    );
+    sums.value_error = value_terms(&ws.value, chunk, total_rows, settings, &mut ws.d_value);
+    sums
+}
 
-    // Policy loss and its gradient with respect to each row's log-probability.
+/// The policy's part of the loss for a chunk whose action means are `mean`: the surrogate, KL and
+/// clip sums, dL/d(mean) into `d_mean` and dL/d(log_std) (the surrogate's share) into
+/// `scratch.d_log_std`.
+pub fn policy_terms(
+    mean: &[f32],
+    log_std: &[f32],
+    chunk: &Minibatch<'_>,
+    total_rows: usize,
+    settings: &LossSettings,
+    scratch: &mut LossScratch,
+    d_mean: &mut [f32],
+) -> LossSums {
+    let rows = chunk.rows;
+    let n = log_std.len();
+    let b = total_rows as f32;
+    gaussian_log_prob(mean, log_std, chunk.actions, rows, scratch);
+
+    // The surrogate and its gradient with respect to each row's log-probability.
     let (lo, hi) = (1.0 - settings.clip_range, 1.0 + settings.clip_range);
     let mut sums = LossSums::default();
     scratch.d_log_prob.clear();
@@ -248,9 +275,35 @@ pub fn forward(
         scratch.d_log_prob.push(-(adv * ratio * weight) / b);
     }
 
-    // Value loss and its gradient.
+    // Through the Gaussian: d log_prob / d mean = (a - mean) / var,
+    // d log_prob / d log_std = (a - mean)^2 / var - 1.
+    scratch.d_log_std.clear();
+    scratch.d_log_std.resize(n, 0.0);
     for r in 0..rows {
-        let v = ws.value[r];
+        let g = scratch.d_log_prob[r];
+        for j in 0..n {
+            let diff = chunk.actions[r * n + j] - mean[r * n + j];
+            let var = scratch.var[j];
+            d_mean[r * n + j] = g * (diff / var);
+            scratch.d_log_std[j] += g * (diff * diff / var - 1.0);
+        }
+    }
+    sums
+}
+
+/// The value loss's sum of squared errors for a chunk whose values are `values`, and dL/d(value)
+/// into `d_value`.
+pub fn value_terms(
+    values: &[f32],
+    chunk: &Minibatch<'_>,
+    total_rows: usize,
+    settings: &LossSettings,
+    d_value: &mut [f32],
+) -> f64 {
+    let b = total_rows as f32;
+    let mut sum = 0.0f64;
+    for r in 0..chunk.rows {
+        let v = values[r];
         let (v_pred, pass) = match settings.clip_range_vf {
             None => (v, 1.0),
             Some(c) => {
@@ -260,24 +313,10 @@ pub fn forward(
             }
         };
         let err = chunk.returns[r] - v_pred;
-        sums.value_error += f64::from(err * err);
-        ws.d_value[r] = settings.vf_coef * (2.0 * (v_pred - chunk.returns[r]) / b) * pass;
+        sum += f64::from(err * err);
+        d_value[r] = settings.vf_coef * (2.0 * (v_pred - chunk.returns[r]) / b) * pass;
     }
-
-    // Through the Gaussian: d log_prob / d mean = (a - mean) / var,
-    // d log_prob / d log_std = (a - mean)^2 / var - 1.
-    scratch.d_log_std.clear();
-    scratch.d_log_std.resize(n, 0.0);
-    for r in 0..rows {
-        let g = scratch.d_log_prob[r];
-        for j in 0..n {
-            let diff = chunk.actions[r * n + j] - ws.mean[r * n + j];
-            let var = scratch.var[j];
-            ws.d_mean[r * n + j] = g * (diff / var);
-            scratch.d_log_std[j] += g * (diff * diff / var - 1.0);
-        }
-    }
-    sums
+    sum
 }
 
 /// The chunk's gradient of the loss of the last [`forward`] with respect to every parameter, into

@@ -1,6 +1,7 @@
 //! Proximal Policy Optimization as Stable-Baselines3 2.x runs it.
 
 pub mod act;
+mod branches;
 pub mod loss;
 pub mod update;
 

@@ -9,8 +9,10 @@
 use rand::Rng;
 use rayon::prelude::*;
 
+use super::branches;
 use super::loss::{self, LossScratch, LossSettings, LossStats, LossSums, Minibatch};
 use crate::buffer::{MinibatchData, RolloutBuffer};
+use crate::nn::network::BranchWorkspace;
 use crate::nn::{ActorCritic, Workspace};
 use crate::optim::{clip_grad_norm, Adam};
 
@@ -92,6 +94,9 @@ pub struct Learner {
     grads: Vec<f32>,
     tensors: Vec<(usize, usize)>,
     minibatch: MinibatchData,
+    branch_ws: [BranchWorkspace; 2],
+    branch_minibatches: [MinibatchData; 2],
+    branch_scratch: LossScratch,
 }
 
 impl Learner {
@@ -113,6 +118,9 @@ impl Learner {
             workers,
             tensors,
             minibatch: MinibatchData::default(),
+            branch_ws: Default::default(),
+            branch_minibatches: Default::default(),
+            branch_scratch: LossScratch::default(),
         }
     }
 
@@ -206,7 +214,9 @@ impl Learner {
     }
 
     /// One full update over `buffer` (returns and advantages computed), drawing minibatches with
-    /// `rng`. On a non-finite loss or gradient the update stops before applying it.
+    /// `rng`. On a non-finite loss or gradient the update stops before applying it. With a pool of two
+    /// threads or more, PPO-small updates its two networks on two threads ([`super::branches`]); any
+    /// other network splits each minibatch's rows across the threads.
     pub fn update<R: Rng>(
         &mut self,
         buffer: &RolloutBuffer,
@@ -214,14 +224,56 @@ impl Learner {
         rng: &mut R,
         pool: Option<&rayon::ThreadPool>,
     ) -> Result<UpdateStats, NonFinite> {
-        let mut entropy_losses = Vec::new();
-        let mut pg_losses = Vec::new();
-        let mut value_losses = Vec::new();
-        let mut clip_fractions = Vec::new();
-        let mut stats = UpdateStats::default();
-        let mut last_loss = 0.0;
-        'epochs: for epoch in 1..=settings.n_epochs {
-            let mut approx_kls = Vec::new();
+        let branch_pool = pool.filter(|p| {
+            p.current_num_threads() >= 2
+                && self.workers.len() >= 2
+                && self.net.branch_split().is_some()
+        });
+        let (records, stopped) = match branch_pool {
+            Some(pool) => self.update_branches(buffer, settings, rng, pool)?,
+            None => self.update_chunks(buffer, settings, rng, pool)?,
+        };
+        let mut stats = UpdateStats {
+            gradient_steps: records.len(),
+            stopped_early: stopped.is_some(),
+            ..UpdateStats::default()
+        };
+        // SB3 logs the losses of every minibatch, the one that stopped the update included, and the
+        // KL estimate of the last epoch's.
+        let all: Vec<&(usize, LossStats)> = records.iter().chain(stopped.as_ref()).collect();
+        let of = |f: fn(&LossStats) -> f32| {
+            mean(&all.iter().map(|(_, s)| f64::from(f(s))).collect::<Vec<_>>())
+        };
+        stats.entropy_loss = of(|s| s.entropy_loss);
+        stats.policy_gradient_loss = of(|s| s.policy_loss);
+        stats.value_loss = of(|s| s.value_loss);
+        stats.clip_fraction = of(|s| s.clip_fraction);
+        stats.epochs = all.last().map_or(0, |(e, _)| *e);
+        let last_epoch: Vec<f64> = all
+            .iter()
+            .filter(|(e, _)| *e == stats.epochs)
+            .map(|(_, s)| f64::from(s.approx_kl))
+            .collect();
+        stats.approx_kl = mean(&last_epoch);
+        stats.loss = records.last().map_or(0.0, |(_, s)| f64::from(s.loss));
+        stats.explained_variance = buffer.explained_variance();
+        let std = self.std();
+        stats.std = std.iter().map(|&s| f64::from(s)).sum::<f64>() / std.len() as f64;
+        Ok(stats)
+    }
+
+    /// The update with each minibatch's rows split across the threads: (epoch, stats) of every
+    /// gradient step, and of the minibatch that stopped the update on the KL test.
+    #[allow(clippy::type_complexity)]
+    fn update_chunks<R: Rng>(
+        &mut self,
+        buffer: &RolloutBuffer,
+        settings: &UpdateSettings,
+        rng: &mut R,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Result<(Vec<(usize, LossStats)>, Option<(usize, LossStats)>), NonFinite> {
+        let mut records = Vec::new();
+        for epoch in 1..=settings.n_epochs {
             for (k, indices) in buffer
                 .minibatch_indices(settings.batch_size, rng)
                 .iter()
@@ -237,17 +289,9 @@ impl Learner {
                 if !s.loss.is_finite() {
                     return Err(where_("loss"));
                 }
-                entropy_losses.push(f64::from(s.entropy_loss));
-                pg_losses.push(f64::from(s.policy_loss));
-                value_losses.push(f64::from(s.value_loss));
-                clip_fractions.push(f64::from(s.clip_fraction));
-                approx_kls.push(f64::from(s.approx_kl));
                 if let Some(target) = settings.target_kl {
                     if f64::from(s.approx_kl) > 1.5 * target {
-                        stats.stopped_early = true;
-                        stats.approx_kl = mean(&approx_kls);
-                        stats.epochs = epoch;
-                        break 'epochs;
+                        return Ok((records, Some((epoch, s))));
                     }
                 }
                 let norm = clip_grad_norm(&mut self.grads, &self.tensors, settings.max_grad_norm);
@@ -256,21 +300,49 @@ impl Learner {
                 }
                 self.adam
                     .step(&mut self.params, &self.grads, settings.learning_rate);
-                stats.gradient_steps += 1;
-                last_loss = f64::from(s.loss);
+                records.push((epoch, s));
             }
-            stats.approx_kl = mean(&approx_kls);
-            stats.epochs = epoch;
         }
-        stats.entropy_loss = mean(&entropy_losses);
-        stats.policy_gradient_loss = mean(&pg_losses);
-        stats.value_loss = mean(&value_losses);
-        stats.clip_fraction = mean(&clip_fractions);
-        stats.loss = last_loss;
-        stats.explained_variance = buffer.explained_variance();
-        let std = self.std();
-        stats.std = std.iter().map(|&s| f64::from(s)).sum::<f64>() / std.len() as f64;
-        Ok(stats)
+        Ok((records, None))
+    }
+
+    /// PPO-small's update on two threads, one per network ([`super::branches`]).
+    #[allow(clippy::type_complexity)]
+    fn update_branches<R: Rng>(
+        &mut self,
+        buffer: &RolloutBuffer,
+        settings: &UpdateSettings,
+        rng: &mut R,
+        pool: &rayon::ThreadPool,
+    ) -> Result<(Vec<(usize, LossStats)>, Option<(usize, LossStats)>), NonFinite> {
+        // Every epoch's permutation up front (the two threads share them).
+        let batches: Vec<Vec<Vec<usize>>> = (0..settings.n_epochs)
+            .map(|_| buffer.minibatch_indices(settings.batch_size, rng))
+            .collect();
+        let parts = branches::Parts {
+            net: &self.net,
+            params: &mut self.params,
+            grads: &mut self.grads,
+            adam: &mut self.adam,
+            ws: &mut self.branch_ws,
+            minibatches: &mut self.branch_minibatches,
+            scratch: &mut self.branch_scratch,
+        };
+        let (policy, value) = branches::run(parts, buffer, &batches, settings, pool);
+        if let Some(e) = policy.non_finite.or(value.non_finite) {
+            return Err(e);
+        }
+        let records = policy
+            .steps
+            .iter()
+            .zip(&value.steps)
+            .map(|(p, v)| (p.epoch, branches::step_stats(p, v, &settings.loss)))
+            .collect();
+        let stopped = policy
+            .stopped
+            .zip(value.stopped)
+            .map(|(p, v)| (p.epoch, branches::step_stats(&p, &v, &settings.loss)));
+        Ok((records, stopped))
     }
 }
 
