@@ -326,6 +326,27 @@ impl Observer for PyObserver {
     }
 }
 
+/// env_throughput(env_json, n_envs, threads, seconds, seed) -> env steps/s of the batched env with
+/// uniform random actions, stepped as the native trainer steps it (no Python in the loop).
+#[pyfunction]
+fn env_throughput(
+    py: Python<'_>,
+    env_json: &str,
+    n_envs: usize,
+    threads: usize,
+    seconds: f64,
+    seed: u64,
+) -> PyResult<f64> {
+    let config = super::parse_config(env_json)?;
+    if !(1..=1024).contains(&n_envs) || !(1..=256).contains(&threads) || !(seconds > 0.0 && seconds <= 3600.0) {
+        return Err(PyValueError::new_err(
+            "n_envs must be in [1, 1024], threads in [1, 256], seconds in (0, 3600]",
+        ));
+    }
+    py.detach(|| snake_rl::bench::env_throughput(&config, n_envs, threads, seconds, seed))
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
 /// train(config_json, run_dir, resume, versions_json, observer) -> dict: trains a run with the native
 /// trainer. The dict has the session's figures, `interrupted` and, when interrupted, `checkpoint`; a
 /// KeyboardInterrupt during training ends it that way (after saving), other errors raise.
@@ -401,6 +422,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parse_yaml, m)?)?;
     m.add_function(wrap_pyfunction!(parse_overrides, m)?)?;
     m.add_function(wrap_pyfunction!(train, m)?)?;
+    m.add_function(wrap_pyfunction!(env_throughput, m)?)?;
     m.add_class::<NativePolicy>()?;
     m.add("IDENTITY_KEYS", snake_rl::config::IDENTITY_KEYS.to_vec())?;
     m.add(

@@ -4,6 +4,7 @@
 //! Python in the training loop.
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod buffer;
 pub mod config;
 pub mod evaluate;

@@ -14,6 +14,7 @@ from __future__ import annotations
 import gymnasium
 
 from snakesim._core import __version__
+from snakesim.config import ENV_DEFAULTS
 from snakesim.env import SnakeEnv
 from snakesim.vector import SnakeVectorEnv
 
@@ -27,7 +28,8 @@ def register_envs() -> None:
     if ENV_ID not in gymnasium.registry:
         # The env truncates at its own max_episode_steps; the spec's 5000 (Snake-v0's) tells tools the
         # episode length, and gymnasium.make(..., max_episode_steps=T) adds a TimeLimit of T.
-        gymnasium.register(id=ENV_ID, entry_point="snakesim.env:SnakeEnv", max_episode_steps=5000)
+        steps = ENV_DEFAULTS["max_episode_steps"]
+        gymnasium.register(id=ENV_ID, entry_point="snakesim.env:SnakeEnv", max_episode_steps=steps)
 
 
 def __getattr__(name: str):

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from snakesim import runconfig
+from snakesim.config import ENV_DEFAULTS
 
 MODEL_FILE = "model.zip"
 NATIVE_MODEL_FILE = "model.safetensors"
@@ -246,7 +247,7 @@ def load_agent(
         env_kwargs = runconfig.env_kwargs(config)
     elif source.exists() or source.suffix == ".zip":
         model_path = source
-        env_kwargs = {"joints": joints, "preset": preset or "paper"}
+        env_kwargs = {"joints": joints, "preset": preset or ENV_DEFAULTS["preset"]}
     else:
         raise AgentError(f"{source} does not exist (expected a run directory or a model .zip)")
 

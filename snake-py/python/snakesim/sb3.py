@@ -10,7 +10,7 @@ from gymnasium import spaces
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
 
 from snakesim import _core
-from snakesim.config import env_config
+from snakesim.config import ENV_DEFAULTS, env_config
 
 
 class SnakeVecEnv(VecEnv):
@@ -80,7 +80,7 @@ class SnakeVecEnv(VecEnv):
         if attr_name == "render_mode":
             return [None for _ in self._get_indices(indices)]
         if attr_name in self._kwargs or attr_name in ("joints", "preset"):
-            value = self._kwargs.get(attr_name, {"joints": 5, "preset": "paper"}.get(attr_name))
+            value = self._kwargs.get(attr_name, ENV_DEFAULTS.get(attr_name))
             return [value for _ in self._get_indices(indices)]
         raise AttributeError(f"SnakeVecEnv envs have no attribute {attr_name!r}")
 

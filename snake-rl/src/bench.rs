@@ -1,0 +1,48 @@
+//! Throughput measurements for benchmarks: the batched env's own speed, the ceiling a trainer
+//! approaches (its learning overhead is what it adds: policy inference and updates).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use snake_core::{EnvConfig, VecSnakeEnv};
+
+/// Env steps per second of `n_envs` envs of `config` stepped with uniform random actions in
+/// [-1, 1], on `threads` threads arranged as the trainer arranges them, for at least `seconds`
+/// (whole steps of all envs; episodes reset as in training).
+pub fn env_throughput(
+    config: &EnvConfig,
+    n_envs: usize,
+    threads: usize,
+    seconds: f64,
+    seed: u64,
+) -> Result<f64, snake_core::Error> {
+    let mut envs = VecSnakeEnv::new(config.clone(), n_envs)?;
+    envs = if threads <= 1 {
+        envs.with_threads(1)?
+    } else {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| snake_core::Error::InvalidArgument(format!("cannot start {threads} threads: {e}")))?;
+        envs.with_pool(Arc::new(pool))
+    };
+    let (n, d) = (config.joints(), config.observation_dim());
+    let mut obs = vec![0.0f32; n_envs * d];
+    envs.reset(Some(seed), &mut obs)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut actions = vec![0.0f32; n_envs * n];
+    let (mut rewards, mut terminated, mut truncated) =
+        (vec![0.0; n_envs], vec![false; n_envs], vec![false; n_envs]);
+    let start = Instant::now();
+    let mut steps = 0u64;
+    while start.elapsed().as_secs_f64() < seconds {
+        for a in actions.iter_mut() {
+            *a = rng.gen_range(-1.0..=1.0);
+        }
+        envs.step(&actions, &mut obs, &mut rewards, &mut terminated, &mut truncated)?;
+        steps += n_envs as u64;
+    }
+    Ok(steps as f64 / start.elapsed().as_secs_f64())
+}
