@@ -4,6 +4,8 @@
 //! stream), and env `i` contributes `(episodes + i) / m` episodes, so a seed fixes the episodes'
 //! starts whatever the policy does.
 
+use std::sync::Arc;
+
 use rand::SeedableRng;
 use rand_chacha::ChaCha12Rng;
 use snake_core::{EnvConfig, VecSnakeEnv};
@@ -98,14 +100,15 @@ pub enum EvalError {
     Interrupted,
 }
 
-/// Runs `episodes` episodes of `policy` (deterministic or sampled) in `config`'s env; `stop` is asked
-/// between steps.
+/// Runs `episodes` episodes of `policy` (deterministic or sampled) in `config`'s env, stepping the
+/// envs on `pool` (one after the other without one); `stop` is asked between steps.
 pub fn run_episodes(
     policy: &mut Policy,
     config: &EnvConfig,
     episodes: usize,
     seed: u64,
     deterministic: bool,
+    pool: Option<&Arc<rayon::ThreadPool>>,
     stop: &mut dyn FnMut() -> bool,
 ) -> Result<Vec<Episode>, EvalError> {
     assert!(episodes >= 1, "an evaluation needs an episode");
@@ -114,6 +117,10 @@ pub fn run_episodes(
     let mut counts = vec![0usize; m];
     let (n, d) = (config.joints(), config.observation_dim());
     let mut envs = VecSnakeEnv::new(config.clone(), m)?;
+    envs = match pool {
+        Some(pool) => envs.with_pool(pool.clone()),
+        None => envs.with_threads(1)?,
+    };
     let mut obs = vec![0.0f32; m * d];
     envs.reset(Some(seed), &mut obs)?;
     let step_seconds = config.snake.dt * f64::from(config.physics_steps_per_env_step);

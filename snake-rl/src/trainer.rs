@@ -11,6 +11,7 @@
 //! bit.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use rand::SeedableRng;
@@ -422,8 +423,12 @@ impl Run {
             .map_err(|e| TrainError::Io(format!("cannot write TensorBoard logs: {e}")))
     }
 
-    /// Evaluates the current policy; false when interrupted.
-    fn evaluate(&mut self, observer: &mut dyn Observer) -> Result<bool, TrainError> {
+    /// Evaluates the current policy on the run's threads; false when interrupted.
+    fn evaluate(
+        &mut self,
+        pool: &Arc<rayon::ThreadPool>,
+        observer: &mut dyn Observer,
+    ) -> Result<bool, TrainError> {
         let start = Instant::now();
         let mut policy = Policy::new(
             self.learner.net().clone(),
@@ -436,6 +441,7 @@ impl Run {
             self.config.eval_episodes,
             self.config.eval_seed(),
             true,
+            (self.threads > 1).then_some(pool),
             &mut || observer.should_stop(),
         ) {
             Ok(e) => e,
@@ -707,7 +713,7 @@ impl Run {
             observer.on_update(&progress);
             // After the update: the evaluation and checkpoint at T hold the policy trained on T.
             if self.timesteps >= next_eval && self.timesteps < c.timesteps {
-                if !self.evaluate(observer)? {
+                if !self.evaluate(pool, observer)? {
                     return self.interrupted(self.timesteps);
                 }
                 last_eval_at = Some(self.timesteps);
@@ -718,7 +724,7 @@ impl Run {
                 next_checkpoint = every(c.checkpoint_freq, self.timesteps);
             }
         }
-        if last_eval_at != Some(self.timesteps) && !self.evaluate(observer)? {
+        if last_eval_at != Some(self.timesteps) && !self.evaluate(pool, observer)? {
             return self.interrupted(self.timesteps);
         }
         self.save_checkpoint("final")?;
