@@ -215,7 +215,7 @@ impl Learner {
 
     /// One full update over `buffer` (returns and advantages computed), drawing minibatches with
     /// `rng`. On a non-finite loss or gradient the update stops before applying it. With a pool of two
-    /// threads or more, PPO-small updates its two networks on two threads ([`super::branches`]); any
+    /// threads or more, PPO-small updates its two networks on two threads (one per network); any
     /// other network splits each minibatch's rows across the threads.
     pub fn update<R: Rng>(
         &mut self,
