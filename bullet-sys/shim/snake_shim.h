@@ -1,8 +1,8 @@
 /*
  * snake_shim.h: a thin C interface over Bullet's btMultiBody API that builds and steps a world the way
  * pybullet 3.2.7 (p.connect(p.DIRECT)) does, so that a snake simulated through it moves bit for bit as
- * pybullet's does. Every setting and call order follows ../shared/notes/pybullet-parity.md and the
- * bullet3 sources it cites (PhysicsServerCommandProcessor.cpp, URDF2Bullet.cpp).
+ * pybullet's does. Every setting and call order follows docs/parity.md and the bullet3 sources it
+ * cites (PhysicsServerCommandProcessor.cpp, URDF2Bullet.cpp).
  *
  * Conventions:
  * - Every function that can fail returns an int status: SS_OK (0) or a negative SS_ERR_* code; the text
