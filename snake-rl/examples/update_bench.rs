@@ -91,7 +91,9 @@ fn main() {
             us(phase[0]), us(phase[1]), us(phase[2]), us(phase[3]), net.len()
         );
     }
-    full_updates();
+    if std::env::var_os("UPDATE_BENCH_MINIBATCH_ONLY").is_none() {
+        full_updates();
+    }
 }
 
 /// One full update of the paper's settings over a random rollout, on `threads` threads; seconds.
