@@ -338,13 +338,11 @@ fn env_throughput(
     seed: u64,
 ) -> PyResult<f64> {
     let config = super::parse_config(env_json)?;
-    if !(1..=1024).contains(&n_envs) || !(1..=256).contains(&threads) || !(seconds > 0.0 && seconds <= 3600.0) {
-        return Err(PyValueError::new_err(
-            "n_envs must be in [1, 1024], threads in [1, 256], seconds in (0, 3600]",
-        ));
-    }
     py.detach(|| snake_rl::bench::env_throughput(&config, n_envs, threads, seconds, seed))
-        .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+        .map_err(|e| match e {
+            snake_core::Error::InvalidArgument(m) => PyValueError::new_err(m),
+            e => PyRuntimeError::new_err(e.to_string()),
+        })
 }
 
 /// train(config_json, run_dir, resume, versions_json, observer) -> dict: trains a run with the native

@@ -8,6 +8,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use snake_core::{EnvConfig, VecSnakeEnv};
 
+use crate::config::limits;
+
 /// Env steps per second of `n_envs` envs of `config` stepped with uniform random actions in
 /// [-1, 1], on `threads` threads arranged as the trainer arranges them, for at least `seconds`
 /// (whole steps of all envs; episodes reset as in training).
@@ -18,6 +20,14 @@ pub fn env_throughput(
     seconds: f64,
     seed: u64,
 ) -> Result<f64, snake_core::Error> {
+    let (max_envs, max_threads) = (limits::MAX_ENVS as usize, limits::MAX_THREADS as usize);
+    let seconds_ok = seconds > 0.0 && seconds <= limits::MAX_BENCH_SECONDS;
+    if !((1..=max_envs).contains(&n_envs) && (1..=max_threads).contains(&threads) && seconds_ok) {
+        return Err(snake_core::Error::InvalidArgument(format!(
+            "n_envs must be in [1, {max_envs}], threads in [1, {max_threads}], seconds in (0, {}]",
+            limits::MAX_BENCH_SECONDS
+        )));
+    }
     let mut envs = VecSnakeEnv::new(config.clone(), n_envs)?;
     envs = if threads <= 1 {
         envs.with_threads(1)?
@@ -25,7 +35,9 @@ pub fn env_throughput(
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
-            .map_err(|e| snake_core::Error::InvalidArgument(format!("cannot start {threads} threads: {e}")))?;
+            .map_err(|e| {
+                snake_core::Error::InvalidArgument(format!("cannot start {threads} threads: {e}"))
+            })?;
         envs.with_pool(Arc::new(pool))
     };
     let (n, d) = (config.joints(), config.observation_dim());
@@ -41,7 +53,13 @@ pub fn env_throughput(
         for a in actions.iter_mut() {
             *a = rng.gen_range(-1.0..=1.0);
         }
-        envs.step(&actions, &mut obs, &mut rewards, &mut terminated, &mut truncated)?;
+        envs.step(
+            &actions,
+            &mut obs,
+            &mut rewards,
+            &mut terminated,
+            &mut truncated,
+        )?;
         steps += n_envs as u64;
     }
     Ok(steps as f64 / start.elapsed().as_secs_f64())

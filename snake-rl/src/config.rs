@@ -49,6 +49,8 @@ pub mod limits {
     pub const MAX_EPOCHS: u64 = 10_000;
     /// Largest seed: SB3 and numpy take seeds below 2^32, so both trainers share that range.
     pub const MAX_SEED: u64 = u32::MAX as u64;
+    /// Longest throughput measurement, seconds.
+    pub const MAX_BENCH_SECONDS: f64 = 3600.0;
 }
 
 /// Which implementation of PPO trains the run.

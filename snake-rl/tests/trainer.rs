@@ -317,14 +317,27 @@ fn a_non_finite_loss_stops_training_after_saving_the_last_good_state() {
     // A learning rate of 1e10 is valid but absurd: one update sends log_std to +-1e10, and the next
     // update's loss is not finite.
     let dir = scratch("non-finite");
-    let config = tiny(json!({"timesteps": 4096, "eval_freq": 0, "checkpoint_freq": 0, "ppo": {"learning_rate": 1e10}}));
+    let config = tiny(
+        json!({"timesteps": 4096, "eval_freq": 0, "checkpoint_freq": 0, "ppo": {"learning_rate": 1e10}}),
+    );
     let err = trainer::train(&session(config, &dir, false), &mut Silent).unwrap_err();
     let message = err.to_string();
-    assert!(matches!(err, trainer::TrainError::NonFinite(_)), "{message}");
-    assert!(message.starts_with("training stopped at update "), "{message}");
+    assert!(
+        matches!(err, trainer::TrainError::NonFinite(_)),
+        "{message}"
+    );
+    assert!(
+        message.starts_with("training stopped at update "),
+        "{message}"
+    );
     assert!(message.contains("non-finite"), "{message}");
     assert!(!message.contains('\n'));
-    let (steps, path) = RunDir::open(&dir).unwrap().0.checkpoints().pop().expect("a checkpoint was saved");
+    let (steps, path) = RunDir::open(&dir)
+        .unwrap()
+        .0
+        .checkpoints()
+        .pop()
+        .expect("a checkpoint was saved");
     assert!(message.contains(&path.display().to_string()), "{message}");
     let c = model::load_checkpoint(&path).expect("the saved state loads");
     assert!(c.policy.params.iter().all(|p| p.is_finite()));
