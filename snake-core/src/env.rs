@@ -1,6 +1,7 @@
 //! The paper's reinforcement-learning environment: [`SnakeEnv`], a Gymnasium-style `reset`/`step`
 //! interface over [`Snake`], bit-exact with the paper's pybullet env.
 
+mod action;
 mod config;
 mod observation;
 mod reward;
@@ -11,12 +12,19 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
 use serde::{Deserialize, Serialize};
 
-pub use config::{EnvConfig, ObservationLayout, StartDistribution};
+pub use action::{
+    ActionConfig, ActionMode, MAX_GAIT_AMPLITUDE, MAX_GAIT_FREQUENCY, MAX_GAIT_STEERING,
+    MAX_RESIDUAL_SCALE,
+};
+pub use config::{
+    EnvConfig, GoalDistribution, ObservationLayout, StartDistribution, Task, MAX_GOAL_DISTANCE,
+};
 pub use reward::{paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardTerms};
 
 use crate::error::{invalid, Result};
 use crate::math::StartPose;
 use crate::Snake;
+use action::Driver;
 use observation::JointScratch;
 
 /// Per-episode choices for [`SnakeEnv::reset`].
@@ -50,6 +58,14 @@ pub struct Info {
     pub goal: (f64, f64),
     /// This episode's start pose.
     pub start: StartPose,
+    /// Mechanical work of the motors in this episode so far, joules: the sum over physics steps and
+    /// joints of |torque x joint velocity| x dt.
+    pub work: f64,
+    /// Length of the base's path in the plane in this episode so far, metres (sampled once per env
+    /// step).
+    pub path_length: f64,
+    /// Straight-line planar distance of the base from where it was after the reset, metres.
+    pub displacement: f64,
 }
 
 /// The result of [`SnakeEnv::step`]: Gymnasium's `(obs, reward, terminated, truncated, info)`.
@@ -200,9 +216,15 @@ pub struct SnakeEnv {
     episode_return: f64,
     distance: f64,
     targets: Vec<f64>,
-    previous_targets: Vec<f64>,
+    previous_action: Vec<f64>,
+    driver: Driver,
     joints: JointScratch,
     torques: Vec<f64>,
+    /// Base position after the reset, and now.
+    origin: (f64, f64),
+    position: (f64, f64),
+    work: f64,
+    path_length: f64,
 }
 
 impl SnakeEnv {
@@ -210,7 +232,14 @@ impl SnakeEnv {
     pub fn new(config: EnvConfig) -> Result<Self> {
         config.validate()?;
         let n = config.joints();
+        let driver = Driver::new(&config);
         Ok(SnakeEnv {
+            previous_action: vec![0.0; config.action_dim()],
+            driver,
+            origin: (0.0, 0.0),
+            position: (0.0, 0.0),
+            work: 0.0,
+            path_length: 0.0,
             goal: config.goal,
             start: StartPose {
                 x: 0.0,
@@ -226,7 +255,6 @@ impl SnakeEnv {
             episode_return: 0.0,
             distance: 0.0,
             targets: vec![0.0; n],
-            previous_targets: vec![0.0; n],
             joints: JointScratch::new(n),
             torques: vec![0.0; n],
         })
@@ -237,9 +265,9 @@ impl SnakeEnv {
         &self.config
     }
 
-    /// Number of joints: the length of an action.
+    /// Length of an action: one value per joint, or 3 in the gait action mode.
     pub fn action_dim(&self) -> usize {
-        self.config.joints()
+        self.config.action_dim()
     }
 
     /// Length of an observation.
@@ -310,6 +338,17 @@ impl SnakeEnv {
                 StartPose { x, y, z: d.z, yaw }
             }
         };
+        // A drawn goal takes two more numbers, after the start's (none with a fixed goal, so the
+        // paper's stream is untouched).
+        let goal = match (options.goal, &self.config.goal_distribution) {
+            (Some(goal), _) => goal,
+            (None, None) => self.config.goal,
+            (None, Some(goals)) => {
+                let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
+                let (u_distance, u_bearing) = (rng.gen::<f64>(), rng.gen::<f64>());
+                goals.goal(start.x, start.y, start.yaw, u_distance, u_bearing)
+            }
+        };
 
         // Drop the old world first: at most one world per env is alive at a time.
         self.snake = None;
@@ -317,18 +356,24 @@ impl SnakeEnv {
         let mut snake = Snake::new(&self.config.snake, start)?;
         // The paper steps once before the first observation.
         snake.step()?;
-        self.goal = options.goal.unwrap_or(self.config.goal);
+        self.goal = goal;
         self.start = start;
         self.episode_step = 0;
         self.episode_return = 0.0;
-        self.previous_targets.fill(0.0);
-        observation::write(
+        self.previous_action.fill(0.0);
+        self.driver.reset();
+        let base = observation::write(
             self.config.observation,
             &snake,
             self.goal,
+            self.wave_phase(),
             &mut self.joints,
             obs,
         )?;
+        self.origin = (base.pose.position.x, base.pose.position.y);
+        self.position = self.origin;
+        self.work = 0.0;
+        self.path_length = 0.0;
         self.distance = paper_distance(
             self.goal,
             obs[0],
@@ -381,14 +426,13 @@ impl SnakeEnv {
                 action.len()
             )));
         }
-        let scale = self.config.action_scale;
-        for (j, (target, a)) in self.targets.iter_mut().zip(action).enumerate() {
+        for (j, a) in action.iter().enumerate() {
             let a: f64 = (*a).into();
             if !a.is_finite() {
                 return Err(invalid(format!("action[{j}] must be finite, got {a}")));
             }
-            *target = a.clamp(-1.0, 1.0) * scale;
         }
+        self.driver.set_action(action.iter().map(|&a| a.into()));
 
         let Some(snake) = self.snake.as_mut() else {
             return Err(invalid(
@@ -398,40 +442,55 @@ impl SnakeEnv {
         let weights = self.config.reward;
         let dt = snake.config().dt;
         let mut work = 0.0;
-        let result = (|| -> Result<()> {
-            snake.set_targets(&self.targets)?;
-            for _ in 0..self.config.physics_steps_per_env_step {
-                snake.step()?;
-                if weights.energy_weight != 0.0 {
-                    let body = snake.body();
-                    snake.world().read_joints(
-                        body,
-                        &mut [],
-                        &mut self.joints.velocities,
-                        &mut self.torques,
-                    )?;
-                    let power: f64 = self
-                        .torques
-                        .iter()
-                        .zip(&self.joints.velocities)
-                        .map(|(t, v)| (t * v).abs())
-                        .sum();
-                    work += power * dt;
-                }
+        let driver = &mut self.driver;
+        let per_physics_step = driver.per_physics_step();
+        let result = (|| -> Result<observation::BaseState> {
+            if !per_physics_step {
+                driver.next_targets(&mut self.targets);
+                snake.set_targets(&self.targets)?;
             }
+            for _ in 0..self.config.physics_steps_per_env_step {
+                if per_physics_step {
+                    driver.next_targets(&mut self.targets);
+                    snake.set_targets(&self.targets)?;
+                }
+                snake.step()?;
+                let body = snake.body();
+                snake.world().read_joints(
+                    body,
+                    &mut [],
+                    &mut self.joints.velocities,
+                    &mut self.torques,
+                )?;
+                let power: f64 = self
+                    .torques
+                    .iter()
+                    .zip(&self.joints.velocities)
+                    .map(|(t, v)| (t * v).abs())
+                    .sum();
+                work += power * dt;
+            }
+            let phase = per_physics_step.then(|| driver.wave_phase());
             observation::write(
                 self.config.observation,
                 snake,
                 self.goal,
+                phase.filter(|_| self.config.observes_wave_phase()),
                 &mut self.joints,
                 obs,
-            )?;
-            Ok(())
+            )
         })();
-        if let Err(e) = result {
-            self.phase = Phase::NeedsReset;
-            return Err(e);
-        }
+        let base = match result {
+            Ok(base) => base,
+            Err(e) => {
+                self.phase = Phase::NeedsReset;
+                return Err(e);
+            }
+        };
+        let p = (base.pose.position.x, base.pose.position.y);
+        self.path_length += (p.0 - self.position.0).hypot(p.1 - self.position.1);
+        self.position = p;
+        self.work += work;
 
         let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
         let success = distance < self.config.goal_radius;
@@ -439,26 +498,26 @@ impl SnakeEnv {
             goal: if success {
                 weights.success_reward
             } else {
-                -distance
+                -(weights.distance_weight * distance)
             },
             ..RewardTerms::default()
         };
         if weights.progress_weight != 0.0 {
             terms.progress = weights.progress_weight * (self.distance - distance);
         }
+        let action = self.driver.action();
         if weights.smoothness_weight != 0.0 {
-            let change: f64 = self
-                .targets
+            let change: f64 = action
                 .iter()
-                .zip(&self.previous_targets)
-                .map(|(t, p)| (t - p) * (t - p))
+                .zip(&self.previous_action)
+                .map(|(a, p)| (a - p) * (a - p))
                 .sum();
             terms.smoothness = -weights.smoothness_weight * change;
         }
         if weights.energy_weight != 0.0 {
             terms.energy = -weights.energy_weight * work;
         }
-        self.previous_targets.copy_from_slice(&self.targets);
+        self.previous_action.copy_from_slice(action);
         self.distance = distance;
         let reward = terms.total(&weights);
         self.episode_step += 1;
@@ -497,6 +556,16 @@ impl SnakeEnv {
             time: self.snake.as_ref().map_or(0.0, Snake::time),
             goal: self.goal,
             start: self.start,
+            work: self.work,
+            path_length: self.path_length,
+            displacement: (self.position.0 - self.origin.0).hypot(self.position.1 - self.origin.1),
         }
+    }
+
+    /// The wave's phase when the observation holds it.
+    fn wave_phase(&self) -> Option<f64> {
+        self.config
+            .observes_wave_phase()
+            .then(|| self.driver.wave_phase())
     }
 }

@@ -42,8 +42,9 @@ pub mod world;
 
 pub use config::{Preset, SnakeConfig};
 pub use env::{
-    DistancePrecision, EnvConfig, Info, ObservationLayout, ResetOptions, RewardConfig, RewardTerms,
-    SnakeEnv, StartDistribution, StepOutcome, StepResult,
+    ActionConfig, ActionMode, DistancePrecision, EnvConfig, GoalDistribution, Info,
+    ObservationLayout, ResetOptions, RewardConfig, RewardTerms, SnakeEnv, StartDistribution,
+    StepOutcome, StepResult, Task,
 };
 pub use error::{Error, Result};
 pub use gait::{Gait, GaitKind, LateralUndulation};

@@ -186,9 +186,9 @@ impl VecSnakeEnv {
         self.slots.len()
     }
 
-    /// Joints per env `N` (the action length of one env).
+    /// Action length of one env `N` (its joints, or 3 in the gait action mode).
     pub fn action_dim(&self) -> usize {
-        self.config.joints()
+        self.config.action_dim()
     }
 
     /// Observation length of one env `D`.

@@ -57,6 +57,9 @@ fn info_dict<'py>(py: Python<'py>, info: &Info) -> PyResult<Bound<'py, PyDict>> 
     d.set_item("reward_progress", info.reward_terms.progress)?;
     d.set_item("reward_smoothness", info.reward_terms.smoothness)?;
     d.set_item("reward_energy", info.reward_terms.energy)?;
+    d.set_item("work", info.work)?;
+    d.set_item("path_length", info.path_length)?;
+    d.set_item("displacement", info.displacement)?;
     Ok(d)
 }
 
@@ -118,9 +121,15 @@ impl Env {
         })
     }
 
-    /// Number of joints (the action length).
+    /// Number of joints.
     #[getter]
     fn joints(&self) -> usize {
+        self.env().config().joints()
+    }
+
+    /// Length of an action (the joints, or 3 in the gait action mode).
+    #[getter]
+    fn action_dim(&self) -> usize {
         self.env().action_dim()
     }
 
@@ -234,6 +243,11 @@ impl VecEnv {
 
     #[getter]
     fn joints(&self) -> usize {
+        self.envs().config().joints()
+    }
+
+    #[getter]
+    fn action_dim(&self) -> usize {
         self.envs().action_dim()
     }
 

@@ -31,10 +31,14 @@ fn run_config_defaults() -> String {
     serde_json::to_string(&RunConfig::default()).expect("serialises")
 }
 
-/// The keywords of `SnakeEnv` with their defaults, as JSON.
+/// The env keywords with their defaults for `task` (`paper`: `SnakeEnv`, `goal`: `SnakeGoalEnv`),
+/// as JSON.
 #[pyfunction]
-fn env_keyword_defaults() -> String {
-    Value::Object(config::env_keyword_defaults()).to_string()
+#[pyo3(signature = (task = "paper"))]
+fn env_keyword_defaults(task: &str) -> PyResult<String> {
+    let task: snake_core::env::Task =
+        config::from_value(Value::from(task), "task").map_err(|e| PyValueError::new_err(e.0))?;
+    Ok(Value::Object(config::env_keyword_defaults(task)).to_string())
 }
 
 /// A checked run configuration from layers (JSON mappings over the defaults, lowest first), as JSON.

@@ -40,7 +40,7 @@ pub fn env_throughput(
             })?;
         envs.with_pool(Arc::new(pool))
     };
-    let (n, d) = (config.joints(), config.observation_dim());
+    let (n, d) = (config.action_dim(), config.observation_dim());
     let mut obs = vec![0.0f32; n_envs * d];
     envs.reset(Some(seed), &mut obs)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -20,6 +20,7 @@
 use serde::de::{self, Deserializer};
 use serde::{Deserialize, Serialize, Serializer};
 use serde_json::{Map, Value};
+use snake_core::env::Task;
 use snake_core::{EnvConfig, Preset};
 
 use crate::nn::Arch;
@@ -422,8 +423,9 @@ pub fn from_value<T: de::DeserializeOwned>(value: Value, prefix: &str) -> Result
 }
 
 /// The env of a run (and of `snakesim.SnakeEnv(**keywords)`): `joints` and `preset` choose the
-/// snake, the `snake` table overrides its parameters, every other key is an [`EnvConfig`] field. Errors
-/// name the key path under `prefix`.
+/// snake, `task` (`paper` or `goal`) the defaults ([`EnvConfig::for_task`]), the `snake` table
+/// overrides the preset's parameters, every other key is an [`EnvConfig`] field over the task's
+/// defaults. Errors name the key path under `prefix`.
 pub fn env_config(
     joints: usize,
     preset: Preset,
@@ -451,6 +453,12 @@ pub fn env_config(
         }
     }
     let mut object = table.clone();
+    let task: Task = match object.remove("task") {
+        None => Task::default(),
+        Some(v) => from_value(v, &at("task"))?,
+    };
+    let mut base = serde_json::to_value(EnvConfig::for_task(task, preset, joints))
+        .expect("EnvConfig serialises");
     let mut snake = serde_json::to_value(preset.config(joints)).expect("SnakeConfig serialises");
     if let Some(overrides) = object.remove("snake") {
         let Value::Object(overrides) = overrides else {
@@ -468,7 +476,8 @@ pub fn env_config(
         merge(&mut snake, &Value::Object(overrides));
     }
     object.insert("snake".into(), snake);
-    let config: EnvConfig = from_value(Value::Object(object), prefix)?;
+    merge(&mut base, &Value::Object(object));
+    let config: EnvConfig = from_value(base, prefix)?;
     config.validate().map_err(|e| with_path(prefix, e))?;
     Ok(config)
 }
@@ -494,13 +503,15 @@ pub fn env_from_keywords(keywords: &Map<String, Value>) -> Result<EnvConfig, Con
     env_config(joints, preset, &table, "")
 }
 
-/// Every keyword of `snakesim.SnakeEnv` with its default, `snake` (the preset's parameters) left out.
-pub fn env_keyword_defaults() -> Map<String, Value> {
+/// Every env keyword with its default for `task` (`snakesim.SnakeEnv`: paper, `SnakeGoalEnv`:
+/// goal), `snake` (the preset's parameters) left out.
+pub fn env_keyword_defaults(task: Task) -> Map<String, Value> {
     let defaults = RunConfig::default();
     let mut map = Map::new();
     map.insert("joints".into(), Value::from(defaults.joints));
     map.insert("preset".into(), Value::from(defaults.preset.name()));
-    let Value::Object(env) = serde_json::to_value(EnvConfig::default()).expect("serialises") else {
+    let env = EnvConfig::for_task(task, defaults.preset, defaults.joints);
+    let Value::Object(env) = serde_json::to_value(env).expect("serialises") else {
         unreachable!("EnvConfig serialises to a mapping")
     };
     for (k, v) in env {
@@ -657,7 +668,7 @@ impl RunConfig {
             check_real("ppo.target_kl", kl, true)?;
         }
         let env = self.env_config()?;
-        let row_bytes = 4 * (env.observation_dim() + env.joints() + 8) as u64;
+        let row_bytes = 4 * (env.observation_dim() + env.action_dim() + 8) as u64;
         if rollout.saturating_mul(row_bytes) > MAX_ROLLOUT_BYTES {
             return Err(err(format!(
                 "ppo.n_steps: a rollout of n_steps * n_envs = {rollout} steps would take {:.1} GiB \
@@ -822,10 +833,33 @@ mod tests {
         assert!(e(r#"{"joints": true}"#).starts_with("joints: invalid type: boolean"));
         assert!(e(r#"{"preset": "x"}"#).starts_with("preset: unknown variant `x`"));
         assert!(e(r#"{"action_scale": "2"}"#).starts_with("action_scale: invalid type: string"));
-        let d = env_keyword_defaults();
+        let d = env_keyword_defaults(Task::Paper);
         assert_eq!(d["joints"], 5);
         assert_eq!(d["max_episode_steps"], 5000);
         assert!(!d.contains_key("snake"));
+        let g = env_keyword_defaults(Task::Goal);
+        assert_eq!(g["max_episode_steps"], 600);
+        assert_eq!(g["action"]["mode"], "gait");
+        // A goal-task table over the task's defaults; null switches the goal distribution off.
+        let c = env_from_keywords(&kw(
+            r#"{"task": "goal", "joints": 10, "goal_distribution": {"distance": [2, 3]}}"#,
+        ))
+        .unwrap();
+        let goals = c.goal_distribution.unwrap();
+        assert_eq!(goals.distance, [2.0, 3.0]);
+        assert_eq!(goals.bearing, [-std::f64::consts::PI, std::f64::consts::PI]);
+        assert_eq!(
+            (c.joints(), c.action_dim(), c.max_episode_steps),
+            (10, 3, 600)
+        );
+        let c = env_from_keywords(&kw(r#"{"task": "goal", "goal_distribution": null}"#)).unwrap();
+        assert_eq!(c.goal_distribution, None);
+        assert_eq!(
+            env_from_keywords(&kw("{}")).unwrap(),
+            EnvConfig::default(),
+            "the paper's env without keywords"
+        );
+        assert!(e(r#"{"task": "run"}"#).starts_with("task: unknown variant `run`"));
     }
 
     #[test]

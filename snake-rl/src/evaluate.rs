@@ -115,7 +115,7 @@ pub fn run_episodes(
     let m = episodes.min(MAX_EVAL_ENVS);
     let targets: Vec<usize> = (0..m).map(|i| (episodes + i) / m).collect();
     let mut counts = vec![0usize; m];
-    let (n, d) = (config.joints(), config.observation_dim());
+    let (n, d) = (config.action_dim(), config.observation_dim());
     let mut envs = VecSnakeEnv::new(config.clone(), m)?;
     envs = match pool {
         Some(pool) => envs.with_pool(pool.clone()),

@@ -174,11 +174,22 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
         meta.insert("observation".into(), c.observation.name().to_owned());
         meta.insert(
             "action".into(),
-            format!(
-                "{} joint targets in [-1, 1] x action_scale {} rad, head to tail",
-                c.joints(),
-                c.action_scale
-            ),
+            match c.action.mode {
+                snake_core::env::ActionMode::Joints => format!(
+                    "{} joint targets in [-1, 1] x action_scale {} rad, head to tail",
+                    c.joints(),
+                    c.action_scale
+                ),
+                snake_core::env::ActionMode::Gait => format!(
+                    "gait: steering {:?} rad, amplitude {:?} rad, frequency {:?} Hz, each from [-1, 1]",
+                    c.action.steering, c.action.amplitude, c.action.frequency
+                ),
+                snake_core::env::ActionMode::Residual => format!(
+                    "residual: {} corrections in [-1, 1] x {} rad added to the default wave, head to tail",
+                    c.joints(),
+                    c.action.residual_scale
+                ),
+            },
         );
     }
     if let Some(rms) = &p.obs_rms {
@@ -366,11 +377,11 @@ impl<'a> Parsed<'a> {
         let config = spec
             .config()
             .map_err(|e| self.error(format!("its env does not build: {e}")))?;
-        if (config.observation_dim(), config.joints()) != (obs_dim, act_dim) {
+        if (config.observation_dim(), config.action_dim()) != (obs_dim, act_dim) {
             return Err(self.error(format!(
                 "its env has {} observations and {} actions, but the network has {obs_dim} and {act_dim}",
                 config.observation_dim(),
-                config.joints()
+                config.action_dim()
             )));
         }
         if obs_dim == 0 || obs_dim > 1 << 16 || act_dim == 0 || act_dim > 1 << 16 {

@@ -300,7 +300,7 @@ impl Run {
         checkpoint: Option<Checkpoint>,
     ) -> Result<Self, TrainError> {
         let env_config = config.env_config().map_err(|e| TrainError::Setup(e.0))?;
-        let (obs_dim, act_dim) = (env_config.observation_dim(), env_config.joints());
+        let (obs_dim, act_dim) = (env_config.observation_dim(), env_config.action_dim());
         let net = ActorCritic::new(config.arch, obs_dim, act_dim);
         let tb = EventWriter::create(&dir.tensorboard_dir()).map_err(|e| {
             TrainError::Io(format!(
@@ -506,7 +506,7 @@ impl Run {
         let c = self.config.clone();
         let (m, n, d) = (
             c.n_envs,
-            self.env_config.joints(),
+            self.env_config.action_dim(),
             self.env_config.observation_dim(),
         );
         // One env after the other on one thread; otherwise on the pool the updates use too.

@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::action::{ActionConfig, ActionMode};
 use super::reward::RewardConfig;
 use crate::config::{Preset, SnakeConfig};
 use crate::error::{invalid, Result};
@@ -19,8 +20,10 @@ pub struct EnvConfig {
     /// [`EnvConfig::snakebot_gym`] or set `base_mass`/`link_mass`. A partial `snake` table in a
     /// serialised config takes its missing fields from the `paper` preset.
     pub snake: SnakeConfig,
-    /// Goal position (x, y) on the plane, metres ((0, -10)).
+    /// Goal position (x, y) on the plane, metres ((0, -10)); used when `goal_distribution` is `None`.
     pub goal: (f64, f64),
+    /// Draw each episode's goal relative to its start pose instead of using `goal` (`None`).
+    pub goal_distribution: Option<GoalDistribution>,
     /// The episode terminates (successfully) when the distance to the goal is below this (1.0 m).
     pub goal_radius: f64,
     /// Env steps after which an episode is truncated (5000, gym's `TimeLimit` of `Snake-v0`).
@@ -29,8 +32,11 @@ pub struct EnvConfig {
     pub physics_steps_per_env_step: u32,
     /// Distribution of the start pose drawn at each reset.
     pub start: StartDistribution,
-    /// Joint targets are `clip(action, -1, 1) * action_scale` radians (1.0).
+    /// Joint targets are `clip(action, -1, 1) * action_scale` radians (1.0), in the `joints` action
+    /// mode.
     pub action_scale: f64,
+    /// What an action sets: joint targets (the paper's), a steered wave, or a wave plus corrections.
+    pub action: ActionConfig,
     /// What the observation holds.
     pub observation: ObservationLayout,
     /// Optional reward terms and the success reward.
@@ -42,14 +48,71 @@ impl Default for EnvConfig {
         EnvConfig {
             snake: SnakeConfig::default(),
             goal: (0.0, -10.0),
+            goal_distribution: None,
             goal_radius: 1.0,
             max_episode_steps: 5000,
             physics_steps_per_env_step: 1,
             start: StartDistribution::default(),
             action_scale: 1.0,
+            action: ActionConfig::default(),
             observation: ObservationLayout::Paper,
             reward: RewardConfig::default(),
         }
+    }
+}
+
+/// Where each episode's goal lies relative to its start pose: at a distance drawn uniformly from
+/// `distance` and a bearing drawn uniformly from `bearing`, measured from the start heading
+/// (0: straight ahead, where the head points; positive: to the left, counterclockwise seen from
+/// above). Drawn after the start pose, distance first, from the env's random stream.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GoalDistribution {
+    /// Range of the distance from the start position, metres ([5, 15]).
+    pub distance: [f64; 2],
+    /// Range of the bearing, radians ([-pi, pi]: any direction).
+    pub bearing: [f64; 2],
+}
+
+impl Default for GoalDistribution {
+    fn default() -> Self {
+        GoalDistribution {
+            distance: [5.0, 15.0],
+            bearing: [-std::f64::consts::PI, std::f64::consts::PI],
+        }
+    }
+}
+
+/// Largest goal distance the goal distribution may draw, metres.
+pub const MAX_GOAL_DISTANCE: f64 = 1000.0;
+
+impl GoalDistribution {
+    /// The goal for a start at (x, y) with heading `yaw`, from two uniform numbers in [0, 1).
+    pub fn goal(&self, x: f64, y: f64, yaw: f64, u_distance: f64, u_bearing: f64) -> (f64, f64) {
+        let [d0, d1] = self.distance;
+        let [b0, b1] = self.bearing;
+        let distance = d0 + (d1 - d0) * u_distance;
+        // The head points along -y at heading 0; rotating that by yaw + bearing about z.
+        let angle = yaw + b0 + (b1 - b0) * u_bearing;
+        (x + distance * angle.sin(), y - distance * angle.cos())
+    }
+
+    /// Checks the ranges; the error names the field.
+    pub fn validate(&self) -> Result<()> {
+        let [d0, d1] = self.distance;
+        if !(d0.is_finite() && d1.is_finite() && 0.0 <= d0 && d0 <= d1 && d1 <= MAX_GOAL_DISTANCE) {
+            return Err(invalid(format!(
+                "goal_distribution.distance must be a range [low, high] with 0 <= low <= high <= {MAX_GOAL_DISTANCE} m, got [{d0}, {d1}]"
+            )));
+        }
+        let [b0, b1] = self.bearing;
+        let tau = std::f64::consts::TAU;
+        if !(b0.is_finite() && b1.is_finite() && b0 <= b1 && b0 >= -tau && b1 <= tau) {
+            return Err(invalid(format!(
+                "goal_distribution.bearing must be a range [low, high] of radians with -2 pi <= low <= high <= 2 pi, got [{b0}, {b1}]"
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -161,7 +224,67 @@ impl std::str::FromStr for ObservationLayout {
     }
 }
 
+/// The task an env's defaults come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Task {
+    /// The paper's env (`Snake-v0`): a fixed goal 10 m ahead, joint-target actions, minus the distance
+    /// as the reward.
+    #[default]
+    Paper,
+    /// Goal reaching (`SnakeGoal-v0`): see [`EnvConfig::goal_task`].
+    Goal,
+}
+
+impl Task {
+    /// Both tasks.
+    pub const ALL: [Task; 2] = [Task::Paper, Task::Goal];
+
+    /// The configuration name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Task::Paper => "paper",
+            Task::Goal => "goal",
+        }
+    }
+}
+
 impl EnvConfig {
+    /// The defaults of `task` for a `preset` snake of `joints` joints.
+    pub fn for_task(task: Task, preset: Preset, joints: usize) -> Self {
+        match task {
+            Task::Paper => EnvConfig::with_preset(preset, joints),
+            Task::Goal => EnvConfig::goal_task(preset, joints),
+        }
+    }
+
+    /// Goal reaching beyond the paper (`snakesim/SnakeGoal-v0`), with the defaults our experiments
+    /// found best (docs/experiments.md, "Beyond the paper"): a goal drawn 5-15 m from the start in any
+    /// direction; actions steer a lateral-undulation wave (the `gait` mode: steering, amplitude,
+    /// frequency) at 30 Hz (8 physics steps per env step); the extended observation with the wave's
+    /// phase; reward: progress towards the goal (1 per metre) and 10 on arrival, no distance term;
+    /// episodes of at most 600 env steps (20 s).
+    pub fn goal_task(preset: Preset, joints: usize) -> Self {
+        EnvConfig {
+            snake: preset.config(joints),
+            goal_distribution: Some(GoalDistribution::default()),
+            max_episode_steps: 600,
+            physics_steps_per_env_step: 8,
+            action: ActionConfig {
+                mode: ActionMode::Gait,
+                ..ActionConfig::default()
+            },
+            observation: ObservationLayout::Extended,
+            reward: RewardConfig {
+                distance_weight: 0.0,
+                progress_weight: 1.0,
+                success_reward: 10.0,
+                ..RewardConfig::default()
+            },
+            ..EnvConfig::default()
+        }
+    }
+
     /// The paper's env with a `preset` snake of `joints` joints.
     pub fn with_preset(preset: Preset, joints: usize) -> Self {
         EnvConfig {
@@ -180,9 +303,20 @@ impl EnvConfig {
         self.snake.joints
     }
 
-    /// Length of the observation vector.
+    /// Length of an action: one value per joint, or the gait mode's three.
+    pub fn action_dim(&self) -> usize {
+        self.action.dim(self.snake.joints)
+    }
+
+    /// Length of the observation vector: the layout's, plus the wave's phase (sin, cos) when the
+    /// extended layout meets a wave action mode.
     pub fn observation_dim(&self) -> usize {
-        self.observation.dim(self.snake.joints)
+        self.observation.dim(self.snake.joints) + 2 * usize::from(self.observes_wave_phase())
+    }
+
+    /// Whether the observation ends with the sine and cosine of the wave's phase at the head.
+    pub fn observes_wave_phase(&self) -> bool {
+        self.observation == ObservationLayout::Extended && self.action.mode.uses_wave()
     }
 
     /// Checks every field; the one-line error names the first bad one.
@@ -209,6 +343,10 @@ impl EnvConfig {
             ));
         }
         self.start.validate()?;
+        if let Some(goals) = &self.goal_distribution {
+            goals.validate()?;
+        }
+        self.action.validate()?;
         if !(self.action_scale.is_finite() && self.action_scale > 0.0) {
             return Err(invalid(format!(
                 "action_scale must be positive and finite, got {}",
@@ -217,6 +355,7 @@ impl EnvConfig {
         }
         let r = &self.reward;
         for (name, w) in [
+            ("reward.distance_weight", r.distance_weight),
             ("reward.progress_weight", r.progress_weight),
             ("reward.smoothness_weight", r.smoothness_weight),
             ("reward.energy_weight", r.energy_weight),

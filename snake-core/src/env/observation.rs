@@ -2,7 +2,7 @@
 
 use super::config::ObservationLayout;
 use crate::error::Result;
-use crate::world::BaseState;
+pub(crate) use crate::world::BaseState;
 use crate::Snake;
 
 /// Planar heading of the base: the rotation about world z of its x axis (0 at the paper's start
@@ -29,7 +29,8 @@ impl JointScratch {
     }
 }
 
-/// Fills `obs` (of the layout's length) from the snake's current state; returns the base state.
+/// Fills `obs` (of the layout's length, plus 2 with a wave phase) from the snake's current state;
+/// returns the base state.
 ///
 /// Every value is the simulator's double cast to `float32` (round to nearest), as the paper's
 /// `np.array(...).astype(np.float32)` does.
@@ -37,6 +38,7 @@ pub(crate) fn write(
     layout: ObservationLayout,
     snake: &Snake,
     goal: (f64, f64),
+    wave_phase: Option<f64>,
     scratch: &mut JointScratch,
     obs: &mut [f32],
 ) -> Result<BaseState> {
@@ -62,6 +64,11 @@ pub(crate) fn write(
         extra.copy_from_slice(&[
             gx as f32, gy as f32, s as f32, c as f32, vx as f32, vy as f32,
         ]);
+        if let Some(phase) = wave_phase {
+            let (s, c) = phase.sin_cos();
+            obs[2 + 2 * n + 6] = s as f32;
+            obs[2 + 2 * n + 7] = c as f32;
+        }
     }
     Ok(base)
 }

@@ -148,13 +148,14 @@ fn exp2i(e: i32) -> f64 {
 /// keeps its bits.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct RewardTerms {
-    /// The paper's term: minus the distance to the goal, or the success reward (100) on the step
-    /// that ends within the goal radius.
+    /// The paper's term: minus `distance_weight` times the distance to the goal (the paper: weight 1),
+    /// or the success reward (100) on the step that ends within the goal radius.
     pub goal: f64,
     /// `progress_weight * (previous distance - distance)`: positive when the base approached the goal.
     pub progress: f64,
-    /// `-smoothness_weight * sum_j (target_j - previous target_j)^2` over the joint targets (radians);
-    /// the previous targets of an episode's first step are 0.
+    /// `-smoothness_weight * sum_i (a_i - previous a_i)^2` over the action clipped to [-1, 1] (in the
+    /// `joints` mode with `action_scale` 1, the joint targets in radians); the previous action of an
+    /// episode's first step is 0.
     pub smoothness: f64,
     /// `-energy_weight * sum over the step's physics steps and joints of |torque_j * velocity_j| * dt`:
     /// the mechanical work (J) of the motors, torque after each physics step times the joint velocity.
@@ -182,6 +183,8 @@ impl RewardTerms {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RewardConfig {
+    /// Weight of minus the distance, the paper's reward (1.0); 0 leaves only the other terms.
+    pub distance_weight: f64,
     /// Weight of the progress term (see [`RewardTerms::progress`]); 0 disables it.
     pub progress_weight: f64,
     /// Weight of the smoothness penalty (see [`RewardTerms::smoothness`]); 0 disables it.
@@ -197,6 +200,7 @@ pub struct RewardConfig {
 impl Default for RewardConfig {
     fn default() -> Self {
         RewardConfig {
+            distance_weight: 1.0,
             progress_weight: 0.0,
             smoothness_weight: 0.0,
             energy_weight: 0.0,

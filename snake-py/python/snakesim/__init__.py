@@ -5,6 +5,11 @@
       import gymnasium, snakesim
       env = gymnasium.make("snakesim/Snake-v0", joints=5, preset="snakebot-gym")
 
+- :class:`SnakeGoalEnv`, goals in any direction 5-15 m away, steered through a gait, registered as
+  ``snakesim/SnakeGoal-v0``::
+
+      env = gymnasium.make("snakesim/SnakeGoal-v0", joints=10)
+
 - :class:`SnakeVecEnv`, Stable-Baselines3's ``VecEnv`` over the batched Rust env (threads, no
   subprocesses), and :class:`SnakeVectorEnv`, the same for Gymnasium's vector API.
 """
@@ -14,22 +19,27 @@ from __future__ import annotations
 import gymnasium
 
 from snakesim._core import __version__
-from snakesim.config import ENV_DEFAULTS
-from snakesim.env import SnakeEnv
+from snakesim.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS
+from snakesim.env import SnakeEnv, SnakeGoalEnv
 from snakesim.vector import SnakeVectorEnv
 
-__all__ = ["SnakeEnv", "SnakeVecEnv", "SnakeVectorEnv", "__version__", "register_envs"]
+__all__ = ["SnakeEnv", "SnakeGoalEnv", "SnakeVecEnv", "SnakeVectorEnv", "__version__", "register_envs"]
 
 ENV_ID = "snakesim/Snake-v0"
+GOAL_ENV_ID = "snakesim/SnakeGoal-v0"
 
 
 def register_envs() -> None:
-    """Registers ``snakesim/Snake-v0`` with Gymnasium (done on import)."""
-    if ENV_ID not in gymnasium.registry:
-        # The env truncates at its own max_episode_steps; the spec's 5000 (Snake-v0's) tells tools the
-        # episode length, and gymnasium.make(..., max_episode_steps=T) adds a TimeLimit of T.
-        steps = ENV_DEFAULTS["max_episode_steps"]
-        gymnasium.register(id=ENV_ID, entry_point="snakesim.env:SnakeEnv", max_episode_steps=steps)
+    """Registers ``snakesim/Snake-v0`` and ``snakesim/SnakeGoal-v0`` with Gymnasium (done on import)."""
+    # The envs truncate at their own max_episode_steps; the spec's tells tools the episode length, and
+    # gymnasium.make(..., max_episode_steps=T) adds a TimeLimit of T.
+    for env_id, entry_point, defaults in (
+        (ENV_ID, "snakesim.env:SnakeEnv", ENV_DEFAULTS),
+        (GOAL_ENV_ID, "snakesim.env:SnakeGoalEnv", GOAL_ENV_DEFAULTS),
+    ):
+        if env_id not in gymnasium.registry:
+            steps = defaults["max_episode_steps"]
+            gymnasium.register(id=env_id, entry_point=entry_point, max_episode_steps=steps)
 
 
 def __getattr__(name: str):

@@ -57,13 +57,17 @@ class Agent:
     num_timesteps: int | None
     obs_normalizer: Any = None  # a VecNormalize whose statistics normalise observations, or None
     config: dict[str, Any] | None = None  # the run's config.yaml, when loaded from a run directory
-    kind: str = "sb3"  # "sb3" (policy: an SB3 ActorCriticPolicy) or "native" (a _core.NativePolicy)
+    # "sb3" (policy: an SB3 ActorCriticPolicy), "native" (a _core.NativePolicy) or "baseline" (a
+    # snakesim.baselines.Controller)
+    kind: str = "sb3"
 
     @property
     def joints(self) -> int:
         return int(self.env_kwargs["joints"])
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
+        if self.kind == "baseline":
+            return self.policy.act(obs)
         if self.kind == "native":
             # The native policy normalises observations itself (with its saved statistics).
             return self.policy.act(np.ascontiguousarray(obs, dtype=np.float32), deterministic)
@@ -214,6 +218,8 @@ def load_agent(
     zip, ``joints`` defaults to what the model's action space says and ``preset`` to ``paper``; a
     native model file names its own env.
     """
+    if isinstance(source, str) and source.startswith(BASELINE_PREFIX):
+        return _load_baseline(source.removeprefix(BASELINE_PREFIX), joints, preset, env_overrides)
     source = Path(source)
     config = None
     normalizer_path = None
@@ -255,10 +261,10 @@ def load_agent(
     if env_kwargs["joints"] is None:
         env_kwargs["joints"] = info.action_dim
     env_kwargs.update(env_overrides or {})
-    from snakesim.env import SnakeEnv
+    from snakesim.env import make_env
 
     try:
-        probe = SnakeEnv(**env_kwargs)
+        probe = make_env(**env_kwargs)
     except (TypeError, ValueError) as error:
         raise AgentError(str(error)) from None
     obs_dim, act_dim = probe.observation_space.shape[0], probe.action_space.shape[0]
@@ -286,6 +292,42 @@ def load_agent(
     )
 
 
+#: ``baseline:NAME`` names a hand-made controller of the goal task (snakesim.baselines).
+BASELINE_PREFIX = "baseline:"
+
+
+def _load_baseline(
+    name: str, joints: int | None, preset: str | None, env_overrides: Mapping[str, Any] | None
+) -> Agent:
+    """A baseline controller in the goal task (``snakesim/SnakeGoal-v0``) with ``joints`` (5) and
+    ``preset`` (paper)."""
+    from snakesim import baselines
+    from snakesim.config import GOAL_ENV_DEFAULTS
+    from snakesim.env import make_env
+
+    env_kwargs: dict[str, Any] = {
+        "task": "goal",
+        "joints": GOAL_ENV_DEFAULTS["joints"] if joints is None else joints,
+        "preset": GOAL_ENV_DEFAULTS["preset"] if preset is None else preset,
+        **(env_overrides or {}),
+    }
+    try:
+        probe = make_env(**env_kwargs)
+        baselines.check_env(probe.config)
+        controller = baselines.Controller(name, probe.joints)
+    except (TypeError, ValueError) as error:
+        raise AgentError(str(error)) from None
+    return Agent(
+        policy=controller,
+        path=BASELINE_PREFIX + name,
+        env_kwargs=env_kwargs,
+        arch="baseline",
+        sb3_version="-",
+        num_timesteps=None,
+        kind="baseline",
+    )
+
+
 def _load_native_agent(
     source: Path,
     *,
@@ -295,7 +337,7 @@ def _load_native_agent(
 ) -> Agent:
     """A native run directory (model.safetensors, else its latest checkpoint) or model file."""
     from snakesim import _core
-    from snakesim.env import SnakeEnv
+    from snakesim.env import make_env
 
     config = None
     if source.is_dir():
@@ -324,7 +366,7 @@ def _load_native_agent(
             raise AgentError(f"{model_path} was trained with {name} {env_kwargs[name]}, not {given}")
     env_kwargs.update(env_overrides or {})
     try:
-        probe = SnakeEnv(**env_kwargs)
+        probe = make_env(**env_kwargs)
     except (TypeError, ValueError) as error:
         raise AgentError(str(error)) from None
     if (probe.observation_space.shape[0], probe.action_space.shape[0]) != (policy.obs_dim, policy.act_dim):
@@ -351,10 +393,37 @@ class Episode:
     success: bool  # reached the goal (terminated), not truncated
     seconds: float  # simulated time of the episode
     distance: float  # head displacement from the start to the end, metres
+    path_length: float = 0.0  # length of the head's path in the plane, metres
+    work: float = 0.0  # mechanical work of the motors, joules
+    weight: float = 0.0  # the snake's weight m g, newtons
 
     @property
     def speed(self) -> float:
+        """Mean speed, m/s: straight-line displacement over the episode's time."""
         return self.distance / self.seconds if self.seconds > 0 else 0.0
+
+    @property
+    def path_efficiency(self) -> float | None:
+        """Straight-line displacement / path length (1: a straight line); None without a path."""
+        return self.distance / self.path_length if self.path_length > 0 else None
+
+    @property
+    def cost_of_transport(self) -> float | None:
+        """Mechanical energy / (m g displacement), dimensionless; None without displacement."""
+        return self.work / (self.weight * self.distance) if self.distance > 0 and self.weight > 0 else None
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.959964) -> tuple[float, float]:
+    """The Wilson score interval of a success rate (95 % by default)."""
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def _mean(values: list[float | None]) -> float | None:
+    present = [v for v in values if v is not None]
+    return float(np.mean(present)) if present else None
 
 
 def run_episodes(
@@ -369,13 +438,15 @@ def run_episodes(
     Up to ``max_envs`` episodes run at once, env i seeded with ``seed + i`` (its later episodes
     continue its stream), so a seed gives the same episodes whatever the policy.
     """
-    from snakesim.env import SnakeEnv
+    from snakesim.env import make_env
     from snakesim.sb3 import SnakeVecEnv
 
     if episodes < 1:
         raise ValueError(f"episodes must be at least 1, got {episodes}")
-    config = SnakeEnv(**env_kwargs).config
+    config = make_env(**env_kwargs).config
     step_seconds = config["snake"]["dt"] * config["physics_steps_per_env_step"]
+    snake = config["snake"]
+    weight = (snake["base_mass"] + snake["joints"] * snake["link_mass"]) * abs(snake["gravity"])
     m = min(episodes, max_envs)
     targets = [(episodes + i) // m for i in range(m)]  # as SB3's evaluate_policy splits them
     counts = [0] * m
@@ -398,6 +469,9 @@ def run_episodes(
                     success=bool(info["success"]),
                     seconds=int(info["episode_step"]) * step_seconds,
                     distance=float(math.hypot(final[0] - start[0], final[1] - start[1])),
+                    path_length=float(info["path_length"]),
+                    work=float(info["work"]),
+                    weight=weight,
                 )
             )
             counts[i] += 1
@@ -406,17 +480,21 @@ def run_episodes(
 
 
 def summarize(episodes: list[Episode]) -> dict[str, Any]:
-    """Mean/std return, success rate, mean steps and seconds to goal (successes only), mean speed."""
+    """Mean/std return, success rate (with its 95 % Wilson interval), mean steps and seconds to goal
+    (successes only), mean speed, path efficiency and cost of transport (over all episodes)."""
     returns = np.array([e.ret for e in episodes])
     wins = [e for e in episodes if e.success]
     return {
         "episodes": len(episodes),
         "success_rate": len(wins) / len(episodes),
+        "success_rate_ci95": list(wilson_interval(len(wins), len(episodes))),
         "mean_return": float(returns.mean()),
         "std_return": float(returns.std()),
         "mean_steps_to_goal": float(np.mean([e.steps for e in wins])) if wins else None,
         "mean_seconds_to_goal": float(np.mean([e.seconds for e in wins])) if wins else None,
         "mean_speed": float(np.mean([e.speed for e in episodes])),
+        "mean_path_efficiency": _mean([e.path_efficiency for e in episodes]),
+        "mean_cost_of_transport": _mean([e.cost_of_transport for e in episodes]),
         "mean_length": float(np.mean([e.steps for e in episodes])),
     }
 
@@ -432,6 +510,8 @@ def evaluate(agent: Agent, episodes: int, seed: int, deterministic: bool = True)
             "success": e.success,
             "seconds": e.seconds,
             "speed": e.speed,
+            "path_efficiency": e.path_efficiency,
+            "cost_of_transport": e.cost_of_transport,
         }
         for e in done
     ]

@@ -65,6 +65,18 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _goal(text: str) -> tuple[float, float]:
+    """X,Y in metres; the env checks the range."""
+    parts = text.split(",")
+    try:
+        x, y = (float(v) for v in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y (two numbers), got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"expected finite X,Y, got {text!r}")
+    return x, y
+
+
 def check_writable(path: str | os.PathLike, what: str = "") -> Path:
     """The output path, if its directory exists and is writable; UserError otherwise."""
     path = Path(path)
@@ -202,7 +214,11 @@ def _load_agent(args: argparse.Namespace):
 
     # One thread: a small MLP gains nothing from more, and they would compete with the env's threads.
     torch.set_num_threads(args.torch_threads)
-    return load_agent(args.source, joints=args.joints, preset=args.preset)
+    overrides = None
+    if getattr(args, "goal", None) is not None:
+        # A fixed goal instead of the task's: e.g. the paper's (0, -10) for a goal-task agent.
+        overrides = {"goal": args.goal, "goal_distribution": None}
+    return load_agent(args.source, joints=args.joints, preset=args.preset, env_overrides=overrides)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
@@ -235,21 +251,28 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     steps = report["mean_steps_to_goal"]
     seconds = report["mean_seconds_to_goal"]
     mode = "stochastic" if args.stochastic else "deterministic"
+    trainer = {"native": "native trainer", "baseline": "hand-made controller"}.get(
+        agent.kind, f"SB3 {agent.sb3_version}"
+    )
+    label = "baseline" if agent.kind == "baseline" else f"PPO-{agent.arch}"
+    low, high = report["success_rate_ci95"]
+
+    def optional(value: float | None, unit: str = "") -> str:
+        return "-" if value is None else f"{value:.3f}{unit}"
+
     rows = [
-        (
-            "model",
-            f"{agent.path} (PPO-{agent.arch}, "
-            + ("native trainer)" if agent.kind == "native" else f"SB3 {agent.sb3_version})"),
-        ),
+        ("model", f"{agent.path} ({label}, {trainer})"),
         ("env", f"{agent.joints} joints, preset {report['preset']}"),
         (
             "episodes",
             f"{report['episodes']} (seed {args.seed}, {mode})",
         ),
-        ("success rate", f"{report['success_rate']:.3f}"),
+        ("success rate", f"{report['success_rate']:.3f} (95 % interval {low:.3f}-{high:.3f})"),
         ("mean return", f"{report['mean_return']:.1f} ± {report['std_return']:.1f}"),
         ("mean steps to goal", "-" if steps is None else f"{steps:.1f} ({seconds:.2f} s)"),
         ("mean speed", f"{report['mean_speed']:.3f} m/s"),
+        ("path efficiency", optional(report["mean_path_efficiency"])),
+        ("cost of transport", optional(report["mean_cost_of_transport"])),
     ]
     width = max(len(name) for name, _ in rows)
     for name, value in rows:
@@ -325,7 +348,8 @@ def _agent_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "source",
         metavar="RUN_OR_MODEL",
-        help="a run directory, a native model .safetensors or an SB3 model .zip (SB3 1.x or 2.x)",
+        help="a run directory, a native model .safetensors, an SB3 model .zip (SB3 1.x or 2.x), or "
+        "baseline:steer / baseline:gait (hand-made controllers of the goal task)",
     )
     p.add_argument(
         "--joints", type=_positive_int, help="for a bare .zip: the snake's joints (default: from the model)"
@@ -445,8 +469,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--verbose", action="store_true", help="print SB3's training tables")
     p.set_defaults(func=cmd_train)
 
-    p = sub.add_parser("evaluate", help="success rate, return, steps to goal and speed of an agent")
+    p = sub.add_parser(
+        "evaluate",
+        help="success rate, return, steps to goal, speed, path efficiency and cost of transport of an agent",
+    )
     _agent_options(p)
+    p.add_argument(
+        "--goal",
+        type=_goal,
+        metavar="X,Y",
+        help="a fixed goal instead of the agent's task's (e.g. 0,-10: the paper's task)",
+    )
     p.add_argument("--episodes", type=_positive_int, default=100, help="episodes (default 100)")
     p.add_argument(
         "--stochastic", action="store_true", help="sample actions instead of the deterministic policy"

@@ -16,10 +16,13 @@ import numpy as np
 from snakesim import _core
 
 #: Every SnakeEnv keyword with its default (``snake``, the preset's physical parameters, aside).
-ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults())
-#: Keywords holding a mapping of overrides; None means the defaults.
-TABLE_KEYWORDS = ("start", "reward", "snake")
-ENV_KEYWORDS = (*ENV_DEFAULTS, *(k for k in TABLE_KEYWORDS if k not in ENV_DEFAULTS))
+ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("paper"))
+#: The same for the goal-reaching task (SnakeGoalEnv, ``snakesim/SnakeGoal-v0``).
+GOAL_ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("goal"))
+#: Keywords holding a mapping of overrides; None means the task's defaults.
+TABLE_KEYWORDS = ("start", "reward", "snake", "action")
+#: Every keyword an env accepts: ``task`` ("paper" or "goal") picks the defaults the others override.
+ENV_KEYWORDS = ("task", *ENV_DEFAULTS, *(k for k in TABLE_KEYWORDS if k not in ENV_DEFAULTS))
 PRESETS: tuple[str, ...] = tuple(_core.PRESETS)
 
 

@@ -12,6 +12,7 @@ from gymnasium import spaces
 
 from snakesim import _core
 from snakesim.config import ENV_DEFAULTS as _D
+from snakesim.config import GOAL_ENV_DEFAULTS as _G
 from snakesim.config import env_config
 from snakesim.render import top_down
 
@@ -25,17 +26,24 @@ class SnakeEnv(gymnasium.Env):
 
     **Action space**: ``Box(-1, 1, (N,), float32)``. Joint target angles, radians, times
     ``action_scale``; actions are clipped to [-1, 1] first. NaN, a wrong shape or a non-numeric dtype
-    raise ``ValueError``.
+    raise ``ValueError``. Other action modes (``action={"mode": ...}``): ``"gait"``, ``Box(-1, 1, (3,))``
+    setting the steering, amplitude and frequency of a lateral-undulation wave within the ranges
+    ``action["steering"]`` ([-0.5, 0.5] rad), ``action["amplitude"]`` ([0.2, 0.6] rad) and
+    ``action["frequency"]`` ([0.4, 1.0] Hz), the wave's phase carried across steps; ``"residual"``,
+    ``Box(-1, 1, (N,))``, pybullet snake.py's wave (0.4 rad, 1.5 s) plus ``action * residual_scale``
+    (0.3 rad) per joint.
 
     **Observation space**: ``Box(-inf, inf, (2 + 2N,), float32)`` with ``observation="paper"``: base
     (head) x, base y, then for each joint its (angle, velocity) pair, interleaved. With
     ``observation="extended"`` six values follow: the goal vector in the head frame (2), sin and cos of
-    the heading (2) and the head's planar velocity in the head frame (2).
+    the heading (2) and the head's planar velocity in the head frame (2); in the gait and residual
+    action modes two more, sin and cos of the wave's phase at the head.
 
-    **Reward**: minus the planar head-goal distance; 100 instead once the head is within
-    ``goal_radius`` of the goal. Optional terms (``reward={...}``, off by default): progress toward
-    the goal, a smoothness penalty on the change of targets between steps, an energy penalty. Every
-    term is reported in ``info``.
+    **Reward**: minus the planar head-goal distance (times ``reward["distance_weight"]``, 1); 100
+    instead once the head is within ``goal_radius`` of the goal. Optional terms (``reward={...}``, off
+    by default): progress toward the goal, a smoothness penalty on the change of the action between
+    steps, an energy penalty on the motors' work. Every term is reported in ``info``, with the
+    episode's mechanical ``work`` (J), ``path_length`` and ``displacement`` (m) so far.
 
     **Episode end**: ``terminated`` when the goal is reached; ``truncated`` after
     ``max_episode_steps`` env steps (5000, as ``Snake-v0``).
@@ -43,29 +51,37 @@ class SnakeEnv(gymnasium.Env):
     **Start state**: each reset builds a fresh world, drops the snake from z = 0.5 at
     x, y ~ U(-0.5, 0.5) with heading ~ U(-0.2, 0.2) rad, and takes one physics step before the first
     observation, as the paper's env does. ``reset(options={"start": (x, y, z, yaw)})`` places it
-    exactly; ``options={"goal": (x, y)}`` moves the goal for that episode.
+    exactly; ``options={"goal": (x, y)}`` moves the goal for that episode. With
+    ``goal_distribution={"distance": [lo, hi], "bearing": [lo, hi]}`` each reset draws the goal at a
+    uniform distance (m) and bearing (rad, 0 ahead of the head, positive to its left) from the start.
 
     **Arguments**: ``joints`` (5), ``preset`` ("paper": every cube 0.06 kg; "snakebot-gym": links
-    1.0 kg as the paper's code), ``goal`` ((0, -10)), ``goal_radius`` (1.0), ``max_episode_steps``
-    (5000), ``physics_steps_per_env_step`` (1), ``start`` (ranges of x, y, yaw and z),
-    ``action_scale`` (1.0), ``observation`` ("paper"), ``reward`` (optional terms), ``snake``
-    (physical parameters over the preset's), ``render_mode`` (None or "rgb_array").
+    1.0 kg as the paper's code), ``goal`` ((0, -10)), ``goal_distribution`` (None: the fixed goal),
+    ``goal_radius`` (1.0), ``max_episode_steps`` (5000), ``physics_steps_per_env_step`` (1),
+    ``start`` (ranges of x, y, yaw and z), ``action_scale`` (1.0), ``action`` (mode and ranges;
+    "joints"), ``observation`` ("paper"), ``reward`` (terms and weights), ``snake`` (physical
+    parameters over the preset's), ``render_mode`` (None or "rgb_array").
 
-    **Version history**: v0, the paper's env.
+    **Version history**: v0, the paper's env. :class:`SnakeGoalEnv` (``snakesim/SnakeGoal-v0``) is the
+    same env with the goal-reaching task's defaults.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
+    #: Whose defaults the keywords override (snake-rl's ``EnvConfig::for_task``).
+    task = "paper"
 
     def __init__(
         self,
         joints: int = _D["joints"],
         preset: str = _D["preset"],
         goal: Sequence[float] = tuple(_D["goal"]),
+        goal_distribution: Mapping[str, Any] | None = _D["goal_distribution"],
         goal_radius: float = _D["goal_radius"],
         max_episode_steps: int = _D["max_episode_steps"],
         physics_steps_per_env_step: int = _D["physics_steps_per_env_step"],
         start: Mapping[str, Any] | None = None,
         action_scale: float = _D["action_scale"],
+        action: Mapping[str, Any] | None = None,
         observation: str = _D["observation"],
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
@@ -78,20 +94,22 @@ class SnakeEnv(gymnasium.Env):
             joints=joints,
             preset=preset,
             goal=goal,
+            goal_distribution=goal_distribution,
             goal_radius=goal_radius,
             max_episode_steps=max_episode_steps,
             physics_steps_per_env_step=physics_steps_per_env_step,
             start=start,
             action_scale=action_scale,
+            action=action,
             observation=observation,
             reward=reward,
             snake=snake,
         )
-        self._config_json = env_config(**self._kwargs)
+        self._config_json = env_config(task=self.task, **self._kwargs)
         self._env = _core.Env(self._config_json)
         self.render_mode = render_mode
         self.joints = self._env.joints
-        self.action_space = spaces.Box(-1.0, 1.0, (self.joints,), dtype=np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, (self._env.action_dim,), dtype=np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, (self._env.observation_dim,), dtype=np.float32)
         self._trail: list[tuple[float, float]] = []
 
@@ -164,3 +182,77 @@ class SnakeEnv(gymnasium.Env):
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__init__(**state["kwargs"], render_mode=state["render_mode"])
+
+
+class SnakeGoalEnv(SnakeEnv):
+    """A snake that steers to goals anywhere around it: ``snakesim/SnakeGoal-v0``.
+
+    The same simulation as :class:`SnakeEnv` (see it for every keyword) with the goal-reaching task's
+    defaults (snake-rl's ``EnvConfig::goal_task``, found best in docs/experiments.md, "Beyond the
+    paper"):
+
+    - **Goal**: drawn at each reset 5-15 m from the start at any bearing (``goal_distribution``);
+      reached within ``goal_radius`` 1 m.
+    - **Action space**: ``Box(-1, 1, (3,), float32)``, the ``gait`` mode: each action sets the
+      lateral-undulation wave's steering ([-0.5, 0.5] rad), amplitude ([0.2, 0.6] rad) and frequency
+      ([0.4, 1.0] Hz); the wave's phase runs on across steps and the joints follow it at 240 Hz.
+      ``action={"mode": "residual"}`` instead adds a per-joint correction to a fixed wave, and
+      ``action={"mode": "joints"}`` sets the joint targets as the paper does.
+    - **Control rate**: 30 Hz (``physics_steps_per_env_step`` 8).
+    - **Observation space**: ``Box(-inf, inf, (2 + 2N + 8,), float32)``, the ``extended`` layout: the
+      paper's values, the goal in the head frame, the heading, the head's planar velocity, then sin
+      and cos of the wave's phase.
+    - **Reward**: progress towards the goal (metres per step, ``progress_weight`` 1) and 10 on
+      arrival (``success_reward``); no distance term (``distance_weight`` 0).
+    - **Episode end**: the goal reached (terminated) or 600 env steps, 20 s (truncated).
+
+    **Version history**: v0.
+    """
+
+    task = "goal"
+
+    def __init__(
+        self,
+        joints: int = _G["joints"],
+        preset: str = _G["preset"],
+        goal: Sequence[float] = tuple(_G["goal"]),
+        goal_distribution: Mapping[str, Any] | None = _G["goal_distribution"],
+        goal_radius: float = _G["goal_radius"],
+        max_episode_steps: int = _G["max_episode_steps"],
+        physics_steps_per_env_step: int = _G["physics_steps_per_env_step"],
+        start: Mapping[str, Any] | None = None,
+        action_scale: float = _G["action_scale"],
+        action: Mapping[str, Any] | None = None,
+        observation: str = _G["observation"],
+        reward: Mapping[str, Any] | None = None,
+        snake: Mapping[str, Any] | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        super().__init__(
+            joints=joints,
+            preset=preset,
+            goal=goal,
+            goal_distribution=goal_distribution,
+            goal_radius=goal_radius,
+            max_episode_steps=max_episode_steps,
+            physics_steps_per_env_step=physics_steps_per_env_step,
+            start=start,
+            action_scale=action_scale,
+            action=action,
+            observation=observation,
+            reward=reward,
+            snake=snake,
+            render_mode=render_mode,
+        )
+
+
+#: The env class of each task.
+TASK_ENVS: dict[str, type[SnakeEnv]] = {SnakeEnv.task: SnakeEnv, SnakeGoalEnv.task: SnakeGoalEnv}
+
+
+def make_env(task: str = SnakeEnv.task, **kwargs: Any) -> SnakeEnv:
+    """The env of ``task`` (``"paper"``: :class:`SnakeEnv`, ``"goal"``: :class:`SnakeGoalEnv`) with
+    the given keywords, as a run's ``env`` table or a model's metadata names it."""
+    if task not in TASK_ENVS:
+        raise ValueError(f"task: unknown task {task!r} (expected one of: {', '.join(TASK_ENVS)})")
+    return TASK_ENVS[task](**kwargs)

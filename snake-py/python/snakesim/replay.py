@@ -62,9 +62,9 @@ def record(
     seed: int = 0,
 ) -> Recording:
     """Runs one episode of ``act(obs_batch) -> actions`` in a SnakeEnv; stops early after ``seconds``."""
-    from snakesim.env import SnakeEnv
+    from snakesim.env import make_env
 
-    env = SnakeEnv(**env_kwargs)
+    env = make_env(**env_kwargs)
     config = env.config
     step_seconds = config["snake"]["dt"] * config["physics_steps_per_env_step"]
     obs, _ = env.reset(seed=seed)

@@ -31,11 +31,11 @@ class SnakeVecEnv(VecEnv):
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
         self._kwargs = dict(kwargs)
         self._core = _core.VecEnv(env_config(**kwargs), num_envs)
-        joints, dim = self._core.joints, self._core.observation_dim
+        actions, dim = self._core.action_dim, self._core.observation_dim
         super().__init__(
             num_envs,
             spaces.Box(-np.inf, np.inf, (dim,), dtype=np.float32),
-            spaces.Box(-1.0, 1.0, (joints,), dtype=np.float32),
+            spaces.Box(-1.0, 1.0, (actions,), dtype=np.float32),
         )
         self._actions: np.ndarray | None = None
 

@@ -33,8 +33,8 @@ class SnakeVectorEnv(VectorEnv):
         self._kwargs = dict(kwargs)
         self._core = _core.VecEnv(env_config(**kwargs), num_envs)
         self.num_envs = num_envs
-        joints, dim = self._core.joints, self._core.observation_dim
-        self.single_action_space = spaces.Box(-1.0, 1.0, (joints,), dtype=np.float32)
+        actions, dim = self._core.action_dim, self._core.observation_dim
+        self.single_action_space = spaces.Box(-1.0, 1.0, (actions,), dtype=np.float32)
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (dim,), dtype=np.float32)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
