@@ -114,7 +114,7 @@ impl ActionConfig {
             )));
         }
         let r = self.residual_scale;
-        if !(r.is_finite() && r >= 0.0 && r <= MAX_RESIDUAL_SCALE) {
+        if !(r.is_finite() && (0.0..=MAX_RESIDUAL_SCALE).contains(&r)) {
             return Err(invalid(format!(
                 "action.residual_scale must be in [0, {MAX_RESIDUAL_SCALE}], got {r}"
             )));
