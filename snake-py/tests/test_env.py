@@ -215,13 +215,15 @@ def test_env_signature_defaults_are_the_rust_defaults():
 
     from snakesim import _core
 
-    rust = json.loads(_core.env_keyword_defaults())
-    params = inspect.signature(snakesim.SnakeEnv.__init__).parameters
-    assert set(params) - {"self", "render_mode"} == set(rust) | {"start", "reward", "snake"}
-    for name, value in rust.items():
-        if name in ("start", "reward"):
-            continue  # tables: None means the defaults
-        default = params[name].default
-        assert (list(default) if isinstance(default, tuple) else default) == value, name
-    for name in ("start", "reward", "snake"):
-        assert params[name].default is None
+    tables = ("start", "reward", "action", "snake")  # None means the task's defaults
+    for cls in (snakesim.SnakeEnv, snakesim.SnakeGoalEnv):
+        rust = json.loads(_core.env_keyword_defaults(cls.task))
+        params = inspect.signature(cls.__init__).parameters
+        assert set(params) - {"self", "render_mode"} == set(rust) | set(tables)
+        for name, value in rust.items():
+            if name in tables:
+                continue
+            default = params[name].default
+            assert (list(default) if isinstance(default, tuple) else default) == value, (cls, name)
+        for name in tables:
+            assert params[name].default is None

@@ -35,10 +35,22 @@ def test_defaults_are_the_papers_table_1():
     assert config["eval_seed"] == 42 + runconfig.EVAL_SEED_OFFSET
 
 
-def test_shipped_configs_are_the_papers_four_runs():
+def test_shipped_configs_are_the_papers_four_runs_and_the_goal_task():
     names = [path.stem for path in CONFIGS]
-    assert names == ["paper-large-10", "paper-large-5", "paper-small-10", "paper-small-5"]
-    for path in CONFIGS:
+    assert names == [
+        "goal-10",
+        "goal-20",
+        "goal-5",
+        "paper-large-10",
+        "paper-large-5",
+        "paper-small-10",
+        "paper-small-5",
+    ]
+    for path in CONFIGS[:3]:
+        config = runconfig.load(path)
+        assert config["env"] == {"task": "goal"} and config["preset"] == "paper", path.name
+        assert config["joints"] == int(path.stem.split("-")[1]), path.name
+    for path in CONFIGS[3:]:
         config = runconfig.load(path)
         arch, joints = path.stem.split("-")[1:]
         assert config["arch"] == arch and config["joints"] == int(joints), path.name
