@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
+use crate::output::say;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::{Gait, LateralUndulation, Preset, Snake, StartPose};
@@ -111,10 +112,11 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if args.steps == 0 || args.repeats == 0 {
         bail!("--steps and --repeats must be at least 1");
     }
-    println!(
+    say!(
         "physics steps per second, one core, gait running; median of {} runs of {} steps",
-        args.repeats, args.steps
-    );
+        args.repeats,
+        args.steps
+    )?;
     let ours: Vec<f64> = args
         .joints
         .iter()
@@ -145,10 +147,13 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         }
     };
 
-    println!(
+    say!(
         "{:>6}  {:>16}  {:>16}  {:>7}",
-        "joints", "snakesim", "pybullet 3.2.7", "ratio"
-    );
+        "joints",
+        "snakesim",
+        "pybullet 3.2.7",
+        "ratio"
+    )?;
     for (&joints, &rate) in args.joints.iter().zip(&ours) {
         let theirs = reference
             .as_ref()
@@ -156,8 +161,8 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             .and_then(|v| serde_json::from_value::<Vec<f64>>(v.clone()).ok())
             .map(median);
         match theirs {
-            Some(t) => println!("{joints:>6}  {rate:>16.0}  {t:>16.0}  {:>6.2}x", rate / t),
-            None => println!("{joints:>6}  {rate:>16.0}  {:>16}  {:>7}", "-", "-"),
+            Some(t) => say!("{joints:>6}  {rate:>16.0}  {t:>16.0}  {:>6.2}x", rate / t)?,
+            None => say!("{joints:>6}  {rate:>16.0}  {:>16}  {:>7}", "-", "-")?,
         }
     }
     Ok(())

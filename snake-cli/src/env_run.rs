@@ -2,6 +2,7 @@
 
 use std::time::Instant;
 
+use crate::output::say;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use rand::{Rng, SeedableRng};
@@ -83,7 +84,7 @@ pub fn run(args: &EnvArgs) -> Result<()> {
     let mut obs = vec![0.0f32; env.observation_dim()];
     let scale = env.config().action_scale;
 
-    println!(
+    say!(
         "env: {} joints, preset {}, policy {}, goal ({}, {}), max {} steps",
         args.joints,
         args.preset,
@@ -94,11 +95,15 @@ pub fn run(args: &EnvArgs) -> Result<()> {
         args.goal.0,
         args.goal.1,
         args.max_steps
-    );
-    println!(
+    )?;
+    say!(
         "{:>7}  {:>12}  {:>6}  {:>7}  {:>9}",
-        "episode", "return", "length", "success", "distance"
-    );
+        "episode",
+        "return",
+        "length",
+        "success",
+        "distance"
+    )?;
     let (mut total_steps, mut successes) = (0u64, 0usize);
     let clock = Instant::now();
     for episode in 0..args.episodes {
@@ -124,22 +129,22 @@ pub fn run(args: &EnvArgs) -> Result<()> {
             length += 1;
             if out.terminated || out.truncated {
                 successes += usize::from(out.info.success);
-                println!(
+                say!(
                     "{episode:>7}  {ret:>12.1}  {length:>6}  {:>7}  {:>8.2}m",
                     if out.info.success { "yes" } else { "no" },
                     out.info.distance
-                );
+                )?;
                 break;
             }
         }
         total_steps += length;
     }
     let wall = clock.elapsed().as_secs_f64();
-    println!(
+    say!(
         "{} episodes, {} reached the goal; {total_steps} env steps in {wall:.2} s: {:.0} env steps/s",
         args.episodes,
         successes,
         total_steps as f64 / wall
-    );
+    )?;
     Ok(())
 }

@@ -2,6 +2,7 @@
 
 mod bench;
 mod env_run;
+mod output;
 mod plot;
 mod run;
 mod train;
@@ -45,6 +46,8 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // Whoever read our output has gone (`snake-cli env ... | head -1`): stop quietly, as Unix tools do.
+        Err(err) if output::is_closed_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             // One line: the error and its causes, for people and for scripts.
             eprintln!("error: {err:#}");

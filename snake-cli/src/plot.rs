@@ -3,10 +3,12 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 use snake_core::{Pose, Snake};
+
+use crate::output::OutputFile;
 
 /// Fonts to label the plot with, the first that exists wins (Debian's fonts-dejavu-core first).
 const FONT_CANDIDATES: &[&str] = &[
@@ -31,11 +33,10 @@ fn font_available() -> bool {
     })
 }
 
-/// Fails early, with the path in the message, if `path` cannot be created.
-pub fn check_writable(path: &Path) -> Result<()> {
-    std::fs::File::create(path)
-        .with_context(|| format!("cannot write plot to {}", path.display()))?;
-    Ok(())
+/// Checks a plot's path before the run (a PNG file in a writable directory); the plot is drawn into
+/// the returned file.
+pub fn output(path: &Path) -> Result<OutputFile> {
+    OutputFile::new(path, "plot", &["png"])
 }
 
 /// What a run leaves to draw.
@@ -70,8 +71,9 @@ impl PathPlot {
         Ok(())
     }
 
-    /// Writes the PNG.
-    pub fn draw(&self, path: &Path, title: &str) -> Result<()> {
+    /// Draws the PNG and puts it in place.
+    pub fn draw(&self, file: OutputFile, title: &str) -> Result<()> {
+        let path = file.path();
         let h = self.half_extent;
         let points = self
             .snapshots
@@ -94,7 +96,7 @@ impl PathPlot {
         );
 
         let err = |e: &dyn std::fmt::Display| anyhow!("cannot draw plot {}: {e}", path.display());
-        let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
+        let root = BitMapBackend::new(file.temp_path(), (900, 900)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let text = font_available();
         let mut builder = ChartBuilder::on(&root);
@@ -160,7 +162,9 @@ impl PathPlot {
             }
         }
         root.present().map_err(|e| err(&e))?;
-        Ok(())
+        drop(chart);
+        drop(root);
+        file.commit()
     }
 }
 

@@ -7,6 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::{Gait, GaitKind, LateralUndulation, Preset, Snake, StartPose};
 
+use crate::output::{check_distinct, say, OutputFile};
 use crate::plot::{self, PathPlot};
 use crate::trajectory::TrajectoryWriter;
 
@@ -86,15 +87,20 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
     }
 
-    // Open the outputs first: an unwritable path fails before any simulation time is spent.
+    // Check the outputs first: a bad path or format fails before any simulation time is spent, and
+    // nothing replaces an existing file until its new contents are complete.
+    if let (Some(csv), Some(png)) = (&args.output, &args.plot) {
+        check_distinct(&[("--output", csv), ("--plot", png)])?;
+    }
+    let plot_file = args.plot.as_deref().map(plot::output).transpose()?;
     let mut csv = args
         .output
         .as_deref()
-        .map(|p| TrajectoryWriter::create(p, args.joints))
+        .map(|p| {
+            let file = OutputFile::new(p, "trajectory", &[])?;
+            TrajectoryWriter::create(file, args.joints)
+        })
         .transpose()?;
-    if let Some(path) = &args.plot {
-        plot::check_writable(path)?;
-    }
 
     let mut snake = Snake::new(&config, start)?;
     let start_position = snake.base_state()?.pose.position;
@@ -122,50 +128,54 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let end = snake.base_state()?.pose;
     let moved = end.position - start_position;
     let distance = moved.xy().norm();
-    println!(
+    say!(
         "snake: {} joints ({} cubes), preset {}, gait {}, steering {}",
         args.joints,
         args.joints + 1,
         args.preset,
         args.gait,
         args.steer
-    );
-    println!(
+    )?;
+    say!(
         "simulated {:.2} s ({steps} steps of 1/{:.0} s) in {wall:.2} s wall: {:.0} steps/s",
         snake.time(),
         1.0 / config.dt,
         steps as f64 / wall
-    );
-    println!(
+    )?;
+    say!(
         "distance   {distance:.3} m, from ({:.3}, {:.3}) to ({:.3}, {:.3})",
-        start_position.x, start_position.y, end.position.x, end.position.y
-    );
-    println!("mean speed {:.3} m/s", distance / snake.time());
-    println!(
+        start_position.x,
+        start_position.y,
+        end.position.x,
+        end.position.y
+    )?;
+    say!("mean speed {:.3} m/s", distance / snake.time())?;
+    say!(
         "heading    travel direction {:+.1} deg (counter-clockwise from +x); head yaw {:+.1} deg",
         moved.y.atan2(moved.x).to_degrees(),
         end.yaw().to_degrees()
-    );
-    println!(
+    )?;
+    say!(
         "final pose x {:+.4} m, y {:+.4} m, z {:.4} m, yaw {:+.4} rad",
         end.position.x,
         end.position.y,
         end.position.z,
         end.yaw()
-    );
+    )?;
     if let (Some(csv), Some(path)) = (csv, &args.output) {
         csv.finish()?;
-        println!("wrote {} ({steps} rows)", path.display());
+        say!("wrote {} ({steps} rows)", path.display())?;
     }
-    if let Some(out) = &args.plot {
+    if let Some(file) = plot_file {
+        let out = file.path().to_path_buf();
         let title = format!(
             "{} joints, {} preset: {distance:.2} m in {:.1} s",
             args.joints,
             args.preset,
             snake.time()
         );
-        path.draw(out, &title)?;
-        println!("wrote {}", out.display());
+        path.draw(file, &title)?;
+        say!("wrote {}", out.display())?;
     }
     Ok(())
 }

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
+use crate::output::say;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -245,7 +246,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         );
     }
     let (resolved, resume_from) = trainer::prepare(&config, &run_dir, args.resume)?;
-    println!(
+    say!(
         "run {}: PPO-{}, {} joints, preset {}, {} timesteps, {} envs, seed {}{}",
         run_dir.display(),
         resolved.arch,
@@ -255,7 +256,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         resolved.n_envs,
         resolved.seed,
         resume_from.map_or(String::new(), |(s, _)| format!(" (resuming from {s})"))
-    );
+    )?;
 
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
@@ -299,7 +300,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             )
         }
         Outcome::Finished(s) => {
-            println!(
+            say!(
                 "trained {} timesteps in {:.1} s: {:.0} timesteps/s ({:.0} without evaluations; rollouts {:.1} s, \
                  updates {:.1} s, {} threads); memory {:.1} -> {:.1} MiB",
                 s.timesteps - s.start_timesteps,
@@ -311,9 +312,9 @@ pub fn run(args: &TrainArgs) -> Result<()> {
                 s.threads,
                 s.rss_mib.0,
                 s.rss_mib.1
-            );
+            )?;
             if let Some(e) = s.last_evaluation {
-                println!(
+                say!(
                     "evaluation at {} timesteps ({} episodes): mean return {:.1} ± {:.1}, success rate {:.2}, \
                      mean steps to goal {}",
                     e.timesteps,
@@ -322,12 +323,12 @@ pub fn run(args: &TrainArgs) -> Result<()> {
                     e.std_return,
                     e.success_rate,
                     e.mean_steps_to_goal.map_or("-".into(), |v| format!("{v:.0}"))
-                );
+                )?;
             }
-            println!(
+            say!(
                 "wrote {}/model.safetensors, evaluations.csv, config.yaml, versions.json, tb/, checkpoints/",
                 run_dir.display()
-            );
+            )?;
             Ok(())
         }
     }

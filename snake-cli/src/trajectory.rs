@@ -7,24 +7,27 @@
 use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
 
 use anyhow::{Context, Result};
 use snake_core::Snake;
 
-/// Streams rows to a CSV file.
+use crate::output::OutputFile;
+
+/// Streams rows to a CSV file (through a temporary file that becomes the target on `finish`).
 pub struct TrajectoryWriter {
     out: BufWriter<File>,
+    file: OutputFile,
     line: String,
     joints: Vec<f64>,
 }
 
 impl TrajectoryWriter {
-    /// Creates (truncates) the file and writes the header.
-    pub fn create(path: &Path, joints: usize) -> Result<Self> {
-        let file = File::create(path)
+    /// Starts the file (checked by [`OutputFile::new`]) and writes the header.
+    pub fn create(file: OutputFile, joints: usize) -> Result<Self> {
+        let path = file.path();
+        let handle = File::create(file.temp_path())
             .with_context(|| format!("cannot write trajectory to {}", path.display()))?;
-        let mut out = BufWriter::new(file);
+        let mut out = BufWriter::new(handle);
         let mut header =
             String::from("step,t,base_x,base_y,base_z,base_qx,base_qy,base_qz,base_qw");
         for j in 0..joints {
@@ -34,6 +37,7 @@ impl TrajectoryWriter {
             .with_context(|| format!("cannot write trajectory to {}", path.display()))?;
         Ok(TrajectoryWriter {
             out,
+            file,
             line: String::new(),
             joints: vec![0.0; joints],
         })
@@ -60,8 +64,15 @@ impl TrajectoryWriter {
             .context("cannot write trajectory row")
     }
 
-    /// Flushes everything to disk.
+    /// Flushes everything and puts the file in place.
     pub fn finish(mut self) -> Result<()> {
-        self.out.flush().context("cannot flush trajectory file")
+        self.out
+            .flush()
+            .and_then(|()| self.out.get_ref().sync_all())
+            .with_context(|| {
+                format!("cannot write trajectory to {}", self.file.path().display())
+            })?;
+        drop(self.out);
+        self.file.commit()
     }
 }

@@ -186,3 +186,88 @@ fn bad_input_is_one_clear_line() {
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
     }
 }
+
+/// A reader that goes away (`snake-cli env ... | head -1`) ends the run quietly with success; a full
+/// disk is one line and a failure. Never a panic.
+#[test]
+fn stdout_errors_are_not_panics() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_snake-cli"))
+        .args(["env", "--episodes", "100000", "--max-steps", "1"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap(); // the reader is dropped here: the pipe closes
+    assert!(first.starts_with("env:"), "{first}");
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(stderr.is_empty(), "{stderr}");
+
+    if let Ok(full) = std::fs::File::create("/dev/full") {
+        let out = Command::new(env!("CARGO_BIN_EXE_snake-cli"))
+            .args(["run", "--seconds", "0.1"])
+            .stdout(full)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains("No space left on device"), "{stderr}");
+    }
+}
+
+/// A run that fails never destroys an existing file: every output is checked before the simulation,
+/// and written through a temporary file renamed into place when complete.
+#[test]
+fn failed_runs_leave_existing_files_alone() {
+    let keep = temp("keep.txt");
+    std::fs::write(&keep, "precious").unwrap();
+    let out = snake_cli(&["run", "--seconds", "200", "--plot", keep.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("must end in .png"), "{stderr}");
+    assert_eq!(std::fs::read_to_string(&keep).unwrap(), "precious");
+
+    // Two outputs on one path: refused, nothing written.
+    let same = temp("same.png");
+    let dotted = same.parent().unwrap().join(".").join("same.png");
+    let out = snake_cli(&[
+        "run",
+        "--seconds",
+        "1",
+        "--output",
+        same.to_str().unwrap(),
+        "--plot",
+        dotted.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("same file"));
+    assert!(!same.exists());
+
+    // An existing CSV survives a run that fails after the check (a plot into a missing directory).
+    let csv = temp("kept.csv");
+    std::fs::write(&csv, "precious").unwrap();
+    let out = snake_cli(&[
+        "run",
+        "--seconds",
+        "1",
+        "--output",
+        csv.to_str().unwrap(),
+        "--plot",
+        "/nonexistent-dir/p.png",
+    ]);
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), "precious");
+    let leftovers: Vec<_> = std::fs::read_dir(csv.parent().unwrap())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".partial"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}

@@ -1,7 +1,7 @@
 //! `snakesim._core`: the compiled half of the Python package. The public Python API is the thin typed
 //! layer in `python/snakesim/`; this module only moves numpy arrays across and maps errors.
 
-use std::sync::{Mutex, MutexGuard};
+use std::sync::Mutex;
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
@@ -103,11 +103,25 @@ struct Env {
     inner: Mutex<SnakeEnv>,
 }
 
+/// Runs `f` on the data behind `mutex` with the interpreter released: the lock is waited for without
+/// the GIL, so a second Python thread using the same object waits its turn instead of deadlocking (a
+/// thread holding the lock may need the GIL back). Calls from several threads are thus serialised.
+fn locked<T: Send, R: Send>(
+    py: Python<'_>,
+    mutex: &Mutex<T>,
+    f: impl FnOnce(&mut T) -> R + Send,
+) -> R {
+    py.detach(|| {
+        // A panic cannot happen while the lock is held (errors are values), so poisoning is not
+        // expected; recover the data if it ever is.
+        let mut guard = mutex.lock().unwrap_or_else(|p| p.into_inner());
+        f(&mut guard)
+    })
+}
+
 impl Env {
-    fn env(&self) -> MutexGuard<'_, SnakeEnv> {
-        // A panic cannot happen while the lock is held (errors are values), so poisoning is not expected;
-        // recover the data if it ever is.
-        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    fn with<R: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut SnakeEnv) -> R + Send) -> R {
+        locked(py, &self.inner, f)
     }
 }
 
@@ -123,41 +137,43 @@ impl Env {
 
     /// Number of joints.
     #[getter]
-    fn joints(&self) -> usize {
-        self.env().config().joints()
+    fn joints(&self, py: Python<'_>) -> usize {
+        self.with(py, |e| e.config().joints())
     }
 
     /// Length of an action (the joints, or 3 in the gait action mode).
     #[getter]
-    fn action_dim(&self) -> usize {
-        self.env().action_dim()
+    fn action_dim(&self, py: Python<'_>) -> usize {
+        self.with(py, |e| e.action_dim())
     }
 
     /// Length of the observation.
     #[getter]
-    fn observation_dim(&self) -> usize {
-        self.env().observation_dim()
+    fn observation_dim(&self, py: Python<'_>) -> usize {
+        self.with(py, |e| e.observation_dim())
     }
 
     /// The goal of the current episode.
     #[getter]
-    fn goal(&self) -> (f64, f64) {
-        self.env().goal()
+    fn goal(&self, py: Python<'_>) -> (f64, f64) {
+        self.with(py, |e| e.goal())
     }
 
     #[getter]
-    fn goal_radius(&self) -> f64 {
-        self.env().config().goal_radius
+    fn goal_radius(&self, py: Python<'_>) -> f64 {
+        self.with(py, |e| e.config().goal_radius)
     }
 
     #[getter]
-    fn half_extent(&self) -> f64 {
-        self.env().config().snake.half_extent
+    fn half_extent(&self, py: Python<'_>) -> f64 {
+        self.with(py, |e| e.config().snake.half_extent)
     }
 
     /// The resolved configuration as JSON.
-    fn config_json(&self) -> String {
-        serde_json::to_string(self.env().config()).expect("EnvConfig serialises")
+    fn config_json(&self, py: Python<'_>) -> String {
+        self.with(py, |e| {
+            serde_json::to_string(e.config()).expect("EnvConfig serialises")
+        })
     }
 
     /// reset(seed, start, goal) -> (obs, info)
@@ -173,18 +189,16 @@ impl Env {
             start: start.map(|(x, y, z, yaw)| StartPose { x, y, z, yaw }),
             goal,
         };
-        let mut guard = self.env();
-        let env: &mut SnakeEnv = &mut guard;
-        let (obs, info) = py.detach(|| env.reset(seed, options)).map_err(to_py)?;
+        let (obs, info) = self
+            .with(py, |env| env.reset(seed, options))
+            .map_err(to_py)?;
         Ok((PyArray1::from_vec(py, obs), info_dict(py, &info)?))
     }
 
     /// step(action) -> (obs, reward, terminated, truncated, info)
     fn step<'py>(&self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<StepTuple<'py>> {
         let action = float_vector(action, "action")?;
-        let mut guard = self.env();
-        let env: &mut SnakeEnv = &mut guard;
-        let result = py.detach(|| env.step(&action)).map_err(to_py)?;
+        let result = self.with(py, |env| env.step(&action)).map_err(to_py)?;
         Ok((
             PyArray1::from_vec(py, result.obs),
             result.reward,
@@ -196,21 +210,24 @@ impl Env {
 
     /// Pose of every cube, the head first: an (N + 1, 7) array of x, y, z, qx, qy, qz, qw.
     fn cube_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let env = self.env();
-        let snake = env
-            .snake()
-            .ok_or_else(|| PyRuntimeError::new_err("no world yet: call reset() first"))?;
-        let poses = snake.cube_poses().map_err(to_py)?;
-        let flat: Vec<f64> = poses
-            .iter()
-            .flat_map(|p| {
-                let q = p.orientation.coords;
-                [p.position.x, p.position.y, p.position.z, q.x, q.y, q.z, q.w]
+        let flat: Option<Result<Vec<f64>, snake_core::Error>> = self.with(py, |env| {
+            env.snake().map(|snake| {
+                snake.cube_poses().map(|poses| {
+                    poses
+                        .iter()
+                        .flat_map(|p| {
+                            let q = p.orientation.coords;
+                            [p.position.x, p.position.y, p.position.z, q.x, q.y, q.z, q.w]
+                        })
+                        .collect()
+                })
             })
-            .collect();
-        Ok(PyArray1::from_vec(py, flat)
-            .reshape([poses.len(), 7])?
-            .into_any())
+        });
+        let flat = flat
+            .ok_or_else(|| PyRuntimeError::new_err("no world yet: call reset() first"))?
+            .map_err(to_py)?;
+        let cubes = flat.len() / 7;
+        Ok(PyArray1::from_vec(py, flat).reshape([cubes, 7])?.into_any())
     }
 }
 
@@ -218,11 +235,13 @@ impl Env {
 #[pyclass(module = "snakesim._core")]
 struct VecEnv {
     inner: Mutex<VecSnakeEnv>,
+    /// (num_envs, action_dim, observation_dim): fixed at construction, read without the lock.
+    dims: (usize, usize, usize),
 }
 
 impl VecEnv {
-    fn envs(&self) -> MutexGuard<'_, VecSnakeEnv> {
-        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    fn with<R: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut VecSnakeEnv) -> R + Send) -> R {
+        locked(py, &self.inner, f)
     }
 }
 
@@ -232,38 +251,41 @@ impl VecEnv {
     fn new(config_json: &str, num_envs: usize) -> PyResult<Self> {
         let envs = VecSnakeEnv::new(parse_config(config_json)?, num_envs).map_err(to_py)?;
         Ok(VecEnv {
+            dims: (envs.num_envs(), envs.action_dim(), envs.observation_dim()),
             inner: Mutex::new(envs),
         })
     }
 
     #[getter]
-    fn num_envs(&self) -> usize {
-        self.envs().num_envs()
+    fn num_envs(&self, py: Python<'_>) -> usize {
+        self.with(py, |e| e.num_envs())
     }
 
     #[getter]
-    fn joints(&self) -> usize {
-        self.envs().config().joints()
+    fn joints(&self, py: Python<'_>) -> usize {
+        self.with(py, |e| e.config().joints())
     }
 
     #[getter]
-    fn action_dim(&self) -> usize {
-        self.envs().action_dim()
+    fn action_dim(&self, py: Python<'_>) -> usize {
+        self.with(py, |e| e.action_dim())
     }
 
     #[getter]
-    fn observation_dim(&self) -> usize {
-        self.envs().observation_dim()
+    fn observation_dim(&self, py: Python<'_>) -> usize {
+        self.with(py, |e| e.observation_dim())
     }
 
     /// reset(seed) -> obs of shape (num_envs, observation_dim); env i is seeded with seed + i.
     #[pyo3(signature = (seed=None))]
     fn reset<'py>(&self, py: Python<'py>, seed: Option<u64>) -> PyResult<Bound<'py, PyAny>> {
-        let mut guard = self.envs();
-        let envs: &mut VecSnakeEnv = &mut guard;
-        let (m, d) = (envs.num_envs(), envs.observation_dim());
-        let mut obs = vec![0.0f32; m * d];
-        py.detach(|| envs.reset(seed, &mut obs)).map_err(to_py)?;
+        let (m, d, obs) = self
+            .with(py, |envs| {
+                let (m, d) = (envs.num_envs(), envs.observation_dim());
+                let mut obs = vec![0.0f32; m * d];
+                envs.reset(seed, &mut obs).map(|()| (m, d, obs))
+            })
+            .map_err(to_py)?;
         Ok(PyArray1::from_vec(py, obs).reshape([m, d])?.into_any())
     }
 
@@ -274,9 +296,7 @@ impl VecEnv {
         py: Python<'py>,
         actions: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyTuple>> {
-        let mut guard = self.envs();
-        let envs: &mut VecSnakeEnv = &mut guard;
-        let (m, n, d) = (envs.num_envs(), envs.action_dim(), envs.observation_dim());
+        let (m, n, d) = self.dims;
         let actions: Vec<f64> = if let Ok(a) = actions.extract::<PyReadonlyArray2<'_, f32>>() {
             check_shape(a.shape(), m, n)?;
             a.as_array().iter().map(|&v| f64::from(v)).collect()
@@ -291,8 +311,8 @@ impl VecEnv {
         let mut terminated = vec![false; m];
         let mut truncated = vec![false; m];
         // Bullet worlds are not Sync, so the finished episodes are copied out while the GIL is released.
-        let finished: Vec<(usize, Vec<f32>, Info)> = py
-            .detach(|| {
+        let finished: Vec<(usize, Vec<f32>, Info)> = self
+            .with(py, |envs| {
                 envs.step(
                     &actions,
                     &mut obs,
