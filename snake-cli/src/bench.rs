@@ -14,6 +14,11 @@ fn pybullet_bench_script() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/pybullet_bench.py")
 }
 
+/// Most joint counts one benchmark measures.
+const MAX_BENCH_SIZES: usize = 16;
+/// Most runs per joint count.
+const MAX_BENCH_REPEATS: usize = 100;
+
 /// Arguments of `snake-cli bench`.
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -106,11 +111,23 @@ fn pybullet_rates(python: &Path, args: &BenchArgs) -> Result<serde_json::Value> 
 
 /// Runs the benchmark and prints a table.
 pub fn bench(args: &BenchArgs) -> Result<()> {
-    if args.joints.is_empty() || args.joints.contains(&0) {
-        bail!("--joints needs one or more counts, each at least 1");
+    let max_joints = snake_core::limits::MAX_JOINTS;
+    if args.joints.is_empty() || args.joints.iter().any(|&j| j == 0 || j > max_joints) {
+        bail!("--joints needs one or more counts, each in [1, {max_joints}]");
     }
-    if args.steps == 0 || args.repeats == 0 {
-        bail!("--steps and --repeats must be at least 1");
+    if args.joints.len() > MAX_BENCH_SIZES {
+        bail!("--joints takes at most {MAX_BENCH_SIZES} counts");
+    }
+    // As long as the longest `snake-cli run` (an hour of simulated time).
+    let max_steps = (snake_core::limits::MAX_RUN_SECONDS * 240.0) as u64;
+    if !(1..=max_steps).contains(&args.steps) {
+        bail!("--steps must be in [1, {max_steps}], got {}", args.steps);
+    }
+    if !(1..=MAX_BENCH_REPEATS).contains(&args.repeats) {
+        bail!(
+            "--repeats must be in [1, {MAX_BENCH_REPEATS}], got {}",
+            args.repeats
+        );
     }
     say!(
         "physics steps per second, one core, gait running; median of {} runs of {} steps",

@@ -68,8 +68,12 @@ pub fn run(args: &EnvArgs) -> Result<()> {
     if args.joints < 1 {
         bail!("--joints must be at least 1, got {}", args.joints);
     }
-    if args.episodes < 1 {
-        bail!("--episodes must be at least 1");
+    let max_episodes = snake_rl::config::limits::MAX_EVAL_EPISODES as usize;
+    if !(1..=max_episodes).contains(&args.episodes) {
+        bail!(
+            "--episodes must be in [1, {max_episodes}], got {}",
+            args.episodes
+        );
     }
     let config = EnvConfig {
         goal: args.goal,

@@ -62,9 +62,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if args.joints < 1 {
         bail!("--joints must be at least 1, got {}", args.joints);
     }
-    if !(args.seconds.is_finite() && args.seconds > 0.0) {
+    let max_seconds = snake_core::limits::MAX_RUN_SECONDS;
+    if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= max_seconds) {
         bail!(
-            "--seconds must be a positive finite number, got {}",
+            "--seconds must be a positive number of at most {max_seconds}, got {:?}",
             args.seconds
         );
     }

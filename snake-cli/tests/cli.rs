@@ -172,6 +172,28 @@ fn bad_input_is_one_clear_line() {
         (&["env", "--goal", "nan,1"], "finite"),
         (&["env", "--episodes", "0"], "--episodes"),
         (&["run", "--no-such-option"], "unexpected argument"),
+        // Limits: sizes, durations and positions (snake_core::limits).
+        (&["run", "--seconds", "1e20"], "at most 3600"),
+        (&["run", "--start=1e18,0,0.25,0"], "at most 10000 m"),
+        (&["run", "--start=1e100,0,0.25,0"], "at most 10000 m"),
+        (&["run", "--start=0,0,-5,0"], "start z must be in [0, 100]"),
+        (&["run", "--joints", "100000"], "joints must be at most 512"),
+        (
+            &["env", "--goal", "1e308,1e308"],
+            "goal must have |x| and |y| at most 10000",
+        ),
+        (
+            &["env", "--episodes", "1000000"],
+            "--episodes must be in [1, 100000]",
+        ),
+        (
+            &["env", "--max-steps", "100000000000"],
+            "max_episode_steps must be in",
+        ),
+        (&["bench", "--steps", "100000000000"], "--steps must be in"),
+        (&["bench", "--repeats", "1000000"], "--repeats must be in"),
+        (&["bench", "--joints", "100000"], "--joints needs"),
+        (&["run", "--plot", "keep.txt"], "must end in .png"),
     ];
     for (args, needle) in cases {
         let out = snake_cli(args);

@@ -317,9 +317,7 @@ impl SnakeEnv {
     ) -> Result<Info> {
         self.check_obs_len(obs)?;
         if let Some(goal) = options.goal {
-            if !(goal.0.is_finite() && goal.1.is_finite()) {
-                return Err(invalid(format!("reset goal must be finite, got {goal:?}")));
-            }
+            crate::limits::check_position("reset goal", goal.0, goal.1)?;
         }
         if let Some(start) = options.start {
             start.validate()?;
@@ -370,6 +368,7 @@ impl SnakeEnv {
             &mut self.joints,
             obs,
         )?;
+        finite_output(obs, 0.0, 0.0)?;
         self.origin = (base.pose.position.x, base.pose.position.y);
         self.position = self.origin;
         self.work = 0.0;
@@ -520,6 +519,12 @@ impl SnakeEnv {
         self.previous_action.copy_from_slice(action);
         self.distance = distance;
         let reward = terms.total(&weights);
+        // The limits keep these finite; if physics ever drifts out of float32's range anyway, it is
+        // an error, never an inf handed to a learner.
+        if let Err(e) = finite_output(obs, reward, self.episode_return + reward) {
+            self.phase = Phase::NeedsReset;
+            return Err(e);
+        }
         self.episode_step += 1;
         self.episode_return += reward;
         let terminated = success;
@@ -568,4 +573,20 @@ impl SnakeEnv {
             .observes_wave_phase()
             .then(|| self.driver.wave_phase())
     }
+}
+
+/// Fails with [`Error::NonFinite`](crate::Error::NonFinite) naming the first non-finite output.
+fn finite_output(obs: &[f32], reward: f64, episode_return: f64) -> Result<()> {
+    if let Some(i) = obs.iter().position(|v| !v.is_finite()) {
+        return Err(crate::Error::NonFinite(format!(
+            "observation[{i}] is {} (outside float32's range)",
+            obs[i]
+        )));
+    }
+    if !reward.is_finite() || !episode_return.is_finite() {
+        return Err(crate::Error::NonFinite(format!(
+            "reward {reward}, episode return {episode_return}"
+        )));
+    }
+    Ok(())
 }

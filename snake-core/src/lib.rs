@@ -35,6 +35,7 @@ pub mod config;
 pub mod env;
 pub mod error;
 pub mod gait;
+pub mod limits;
 pub mod math;
 pub mod snake;
 pub mod vec_env;

@@ -44,16 +44,18 @@ impl StartPose {
 
     /// Checks that every value is finite.
     pub fn validate(&self) -> crate::Result<()> {
-        if [self.x, self.y, self.z, self.yaw]
+        use crate::limits::{check_position, check_range, MAX_START_HEIGHT, MAX_YAW};
+        if ![self.x, self.y, self.z, self.yaw]
             .iter()
             .all(|v| v.is_finite())
         {
-            Ok(())
-        } else {
-            Err(crate::error::invalid(format!(
+            return Err(crate::error::invalid(format!(
                 "start pose must be finite, got {self:?}"
-            )))
+            )));
         }
+        check_position("start", self.x, self.y)?;
+        check_range("start z", self.z, 0.0, MAX_START_HEIGHT)?;
+        check_range("start yaw", self.yaw, -MAX_YAW, MAX_YAW)
     }
 }
 

@@ -135,8 +135,11 @@ fn check_len(what: &str, len: usize, expected: usize) -> Result<()> {
 impl VecSnakeEnv {
     /// `num_envs` (at least 1) envs of `config`, stepped on rayon's global thread pool.
     pub fn new(config: EnvConfig, num_envs: usize) -> Result<Self> {
-        if num_envs < 1 {
-            return Err(invalid("num_envs must be at least 1, got 0"));
+        let max = crate::limits::MAX_ENVS;
+        if !(1..=max).contains(&num_envs) {
+            return Err(invalid(format!(
+                "num_envs must be in [1, {max}], got {num_envs}"
+            )));
         }
         let d = config.observation_dim();
         let slots = (0..num_envs)

@@ -437,5 +437,33 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ARCHS", snake_rl::nn::Arch::NAMES.to_vec())?;
     m.add("EVAL_SEED_OFFSET", snake_rl::config::EVAL_SEED_OFFSET)?;
     m.add("NATIVE_MODEL_FILE", snake_rl::rundir::MODEL_FILE)?;
+    m.add("LIMITS", limits(m.py())?)?;
     Ok(())
+}
+
+/// Every limit on sizes, ranges and durations (snake-core's and the run configuration's), by name,
+/// for the Python side's checks and messages.
+fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    use snake_core::limits as core;
+    use snake_rl::config::limits as run;
+    let d = PyDict::new(py);
+    d.set_item("joints", core::MAX_JOINTS)?;
+    d.set_item("position", core::MAX_POSITION)?;
+    d.set_item("start_height", core::MAX_START_HEIGHT)?;
+    d.set_item("yaw", core::MAX_YAW)?;
+    d.set_item("reward_weight", core::MAX_REWARD_WEIGHT)?;
+    d.set_item("action_scale", core::MAX_ACTION_SCALE)?;
+    d.set_item("episode_steps", core::MAX_EPISODE_STEPS)?;
+    d.set_item(
+        "physics_steps_per_env_step",
+        core::MAX_PHYSICS_STEPS_PER_ENV_STEP,
+    )?;
+    d.set_item("envs", core::MAX_ENVS)?;
+    d.set_item("run_seconds", core::MAX_RUN_SECONDS)?;
+    d.set_item("timesteps", run::MAX_TIMESTEPS)?;
+    d.set_item("eval_episodes", run::MAX_EVAL_EPISODES)?;
+    d.set_item("threads", run::MAX_THREADS)?;
+    d.set_item("seed", run::MAX_SEED)?;
+    d.set_item("bench_seconds", run::MAX_BENCH_SECONDS)?;
+    Ok(d)
 }

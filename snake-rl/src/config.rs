@@ -36,8 +36,8 @@ fn err(message: impl Into<String>) -> ConfigError {
 
 /// Limits of a run's sizes: each keeps a typo from asking for an impossible run.
 pub mod limits {
-    /// Most parallel envs of a run.
-    pub const MAX_ENVS: u64 = 1024;
+    /// Most parallel envs of a run (snake-core's batched env's limit).
+    pub const MAX_ENVS: u64 = snake_core::limits::MAX_ENVS as u64;
     /// Most timesteps of a run (10^12: decades at our speed).
     pub const MAX_TIMESTEPS: u64 = 1_000_000_000_000;
     /// Most episodes of one evaluation.

@@ -6,6 +6,10 @@ use super::action::{ActionConfig, ActionMode};
 use super::reward::RewardConfig;
 use crate::config::{Preset, SnakeConfig};
 use crate::error::{invalid, Result};
+use crate::limits::{
+    check_position, check_range, MAX_ACTION_SCALE, MAX_EPISODE_STEPS,
+    MAX_PHYSICS_STEPS_PER_ENV_STEP, MAX_POSITION, MAX_REWARD_WEIGHT, MAX_START_HEIGHT, MAX_YAW,
+};
 
 /// Everything that defines a [`SnakeEnv`](super::SnakeEnv); the defaults are the paper's env
 /// (`Snake-v0` of snakebot-gym) except for the snake's masses, which follow the paper's text (see
@@ -155,12 +159,13 @@ impl StartDistribution {
         }
     }
 
-    /// Checks that the ranges are finite and ordered; the error names the field.
+    /// Checks that the ranges are finite, ordered and within [`crate::limits`]; the error names the
+    /// field.
     pub fn validate(&self) -> Result<()> {
-        for (name, [low, high]) in [
-            ("start.x", self.x),
-            ("start.y", self.y),
-            ("start.yaw", self.yaw),
+        for (name, [low, high], bound) in [
+            ("start.x", self.x, MAX_POSITION),
+            ("start.y", self.y, MAX_POSITION),
+            ("start.yaw", self.yaw, MAX_YAW),
         ] {
             if !(low.is_finite() && high.is_finite()) {
                 return Err(invalid(format!(
@@ -172,11 +177,13 @@ impl StartDistribution {
                     "{name} must have low <= high, got [{low}, {high}]"
                 )));
             }
+            if low < -bound || high > bound {
+                return Err(invalid(format!(
+                    "{name} must lie within [-{bound}, {bound}], got [{low:?}, {high:?}]"
+                )));
+            }
         }
-        if !self.z.is_finite() {
-            return Err(invalid(format!("start.z must be finite, got {}", self.z)));
-        }
-        Ok(())
+        check_range("start.z", self.z, 0.0, MAX_START_HEIGHT)
     }
 }
 
@@ -325,31 +332,31 @@ impl EnvConfig {
             crate::Error::InvalidArgument(m) => invalid(format!("snake.{m}")),
             other => other,
         })?;
-        if !(self.goal.0.is_finite() && self.goal.1.is_finite()) {
-            return Err(invalid(format!("goal must be finite, got {:?}", self.goal)));
-        }
-        if !(self.goal_radius.is_finite() && self.goal_radius >= 0.0) {
+        check_position("goal", self.goal.0, self.goal.1)?;
+        check_range("goal_radius", self.goal_radius, 0.0, MAX_POSITION)?;
+        if !(1..=MAX_EPISODE_STEPS).contains(&self.max_episode_steps) {
             return Err(invalid(format!(
-                "goal_radius must be finite and >= 0, got {}",
-                self.goal_radius
+                "max_episode_steps must be in [1, {MAX_EPISODE_STEPS}], got {}",
+                self.max_episode_steps
             )));
         }
-        if self.max_episode_steps < 1 {
-            return Err(invalid("max_episode_steps must be at least 1, got 0"));
-        }
-        if self.physics_steps_per_env_step < 1 {
-            return Err(invalid(
-                "physics_steps_per_env_step must be at least 1, got 0",
-            ));
+        if !(1..=MAX_PHYSICS_STEPS_PER_ENV_STEP).contains(&self.physics_steps_per_env_step) {
+            return Err(invalid(format!(
+                "physics_steps_per_env_step must be in [1, {MAX_PHYSICS_STEPS_PER_ENV_STEP}], got {}",
+                self.physics_steps_per_env_step
+            )));
         }
         self.start.validate()?;
         if let Some(goals) = &self.goal_distribution {
             goals.validate()?;
         }
         self.action.validate()?;
-        if !(self.action_scale.is_finite() && self.action_scale > 0.0) {
+        if !(self.action_scale.is_finite()
+            && self.action_scale > 0.0
+            && self.action_scale <= MAX_ACTION_SCALE)
+        {
             return Err(invalid(format!(
-                "action_scale must be positive and finite, got {}",
+                "action_scale must be in (0, {MAX_ACTION_SCALE}], got {}",
                 self.action_scale
             )));
         }
@@ -361,9 +368,7 @@ impl EnvConfig {
             ("reward.energy_weight", r.energy_weight),
             ("reward.success_reward", r.success_reward),
         ] {
-            if !w.is_finite() {
-                return Err(invalid(format!("{name} must be finite, got {w}")));
-            }
+            check_range(name, w, -MAX_REWARD_WEIGHT, MAX_REWARD_WEIGHT)?;
         }
         Ok(())
     }

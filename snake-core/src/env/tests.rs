@@ -411,3 +411,82 @@ fn several_physics_steps_per_env_step() {
     let step = e.step(&[0.1f32; 5]).unwrap();
     assert_eq!(step.info.time, 5.0 / 240.0);
 }
+
+/// Values beyond `crate::limits` are refused with the field named; inside them every output is finite.
+#[test]
+fn limits_refuse_what_would_not_be_finite_or_resolved() {
+    use crate::limits::MAX_POSITION;
+    let refused = |config: EnvConfig, needle: &str| {
+        let e = SnakeEnv::new(config).expect_err("refused").to_string();
+        assert!(e.contains(needle), "'{e}' should mention {needle}");
+    };
+    refused(
+        EnvConfig {
+            goal: (1e308, 0.0),
+            ..EnvConfig::default()
+        },
+        "goal must have |x| and |y| at most 10000",
+    );
+    let mut weights = EnvConfig::default();
+    weights.reward.energy_weight = 1e308;
+    refused(weights, "reward.energy_weight must be in");
+    refused(
+        EnvConfig {
+            physics_steps_per_env_step: u32::MAX,
+            ..EnvConfig::default()
+        },
+        "physics_steps_per_env_step must be in [1, 240]",
+    );
+    let mut start = EnvConfig::default();
+    start.start.y = [0.0, 1e18];
+    refused(start, "start.y must lie within");
+
+    let mut env = SnakeEnv::new(EnvConfig::default()).unwrap();
+    for (x, needle) in [(1e39, "start must have"), (f64::MAX, "start must have")] {
+        let options = ResetOptions {
+            start: Some(StartPose {
+                x,
+                y: 0.0,
+                z: 0.5,
+                yaw: 0.0,
+            }),
+            goal: None,
+        };
+        let e = env.reset(Some(0), options).unwrap_err().to_string();
+        assert!(e.contains(needle), "{e}");
+    }
+    let far_goal = ResetOptions {
+        start: None,
+        goal: Some((0.0, -1e39)),
+    };
+    assert!(env.reset(Some(0), far_goal).is_err());
+
+    // At the edge of the limits the snake still rests on the plane and everything is finite.
+    let mut config = EnvConfig {
+        goal: (-MAX_POSITION, MAX_POSITION),
+        ..EnvConfig::default()
+    };
+    config.reward.distance_weight = crate::limits::MAX_REWARD_WEIGHT;
+    config.reward.energy_weight = crate::limits::MAX_REWARD_WEIGHT;
+    let mut env = SnakeEnv::new(config).unwrap();
+    let edge = ResetOptions {
+        start: Some(StartPose {
+            x: MAX_POSITION,
+            y: -MAX_POSITION,
+            z: 0.5,
+            yaw: 0.0,
+        }),
+        goal: None,
+    };
+    env.reset(Some(0), edge).unwrap();
+    for k in 0..240 {
+        let a = (k as f32 * 0.1).sin();
+        let step = env.step(&[a, -a, a, -a, a]).unwrap();
+        assert!(step.reward.is_finite() && step.obs.iter().all(|v| v.is_finite()));
+    }
+    let poses = env.snake().unwrap().cube_poses().unwrap();
+    assert!(
+        poses.iter().all(|p| (p.position.z - 0.25).abs() < 0.01),
+        "resting on the plane"
+    );
+}

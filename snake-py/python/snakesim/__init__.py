@@ -31,15 +31,20 @@ GOAL_ENV_ID = "snakesim/SnakeGoal-v0"
 
 def register_envs() -> None:
     """Registers ``snakesim/Snake-v0`` and ``snakesim/SnakeGoal-v0`` with Gymnasium (done on import)."""
-    # The envs truncate at their own max_episode_steps; the spec's tells tools the episode length, and
-    # gymnasium.make(..., max_episode_steps=T) adds a TimeLimit of T.
+    # gymnasium.make wraps the env in a TimeLimit of the spec's max_episode_steps (the task's default),
+    # or of T with gymnasium.make(..., max_episode_steps=T). That wrapper alone truncates: the env is
+    # made with max_episode_steps=None (no limit of its own), so that T may also exceed the default.
     for env_id, entry_point, defaults in (
         (ENV_ID, "snakesim.env:SnakeEnv", ENV_DEFAULTS),
         (GOAL_ENV_ID, "snakesim.env:SnakeGoalEnv", GOAL_ENV_DEFAULTS),
     ):
         if env_id not in gymnasium.registry:
-            steps = defaults["max_episode_steps"]
-            gymnasium.register(id=env_id, entry_point=entry_point, max_episode_steps=steps)
+            gymnasium.register(
+                id=env_id,
+                entry_point=entry_point,
+                max_episode_steps=defaults["max_episode_steps"],
+                kwargs={"max_episode_steps": None},
+            )
 
 
 def __getattr__(name: str):

@@ -57,6 +57,7 @@ PRESETS: list[str]
 ARCHS: list[str]
 EVAL_SEED_OFFSET: int
 NATIVE_MODEL_FILE: str
+LIMITS: dict[str, int | float]
 
 def run_config_defaults() -> str: ...
 def env_keyword_defaults(task: str = "paper") -> str: ...

@@ -92,6 +92,34 @@ def checkpoints(run_dir: str | os.PathLike, native: bool = False) -> list[tuple[
     return sorted(found)
 
 
+def _first_line(error: BaseException, limit: int = 160) -> str:
+    """The error's type and the start of its first line, for a one-line message."""
+    lines = str(error).strip().splitlines()
+    first = lines[0] if lines else ""
+    return f"{type(error).__name__}: {first[:limit]}{'...' if len(first) > limit else ''}"
+
+
+# Largest observation or action length a model may declare (a snake of MAX_JOINTS joints has ~1000).
+_MAX_SPACE_SIZE = 1 << 16
+
+
+def load_normalizer(path: str | os.PathLike):
+    """A ``VecNormalize`` saved beside a model, for evaluation (not updated); AgentError when the file
+    is not one."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    try:
+        with open(path, "rb") as f:
+            normalizer = pickle.load(f)
+    except Exception as error:  # noqa: BLE001 - unpickling garbage fails in many ways
+        raise AgentError(f"{os.fspath(path)} is not a VecNormalize pickle: {_first_line(error)}") from None
+    if not isinstance(normalizer, VecNormalize):
+        held = type(normalizer).__name__
+        raise AgentError(f"{os.fspath(path)} is not a VecNormalize pickle (it holds {held})")
+    normalizer.training = False
+    return normalizer
+
+
 def checkpoint_paths(run_dir: str | os.PathLike, timesteps: int) -> tuple[Path, Path]:
     folder = Path(run_dir) / CHECKPOINT_DIR
     return folder / f"model_{timesteps}_steps.zip", folder / f"vecnormalize_{timesteps}_steps.pkl"
@@ -123,9 +151,10 @@ def inspect_model(path: str | os.PathLike) -> ModelInfo:
         obs_shape = shape(data["observation_space"])
         act_shape = shape(data["action_space"])
         space_type = str(data["observation_space"].get(":type:", ""))
-    except (KeyError, TypeError):
+    except (KeyError, TypeError, AttributeError):
         raise AgentError(f"{os.fspath(path)} has no Box observation/action spaces") from None
-    if len(obs_shape) != 1 or len(act_shape) != 1:
+    flat = len(obs_shape) == 1 and len(act_shape) == 1
+    if not flat or not all(type(n) is int and 0 < n <= _MAX_SPACE_SIZE for n in obs_shape + act_shape):
         raise AgentError(f"{os.fspath(path)}: expected flat Box spaces, got {obs_shape} and {act_shape}")
     legacy = version.startswith(("0.", "1.")) or "'gym." in space_type
     steps = data.get("num_timesteps")
@@ -196,8 +225,8 @@ def _load_policy(path: Path, info: ModelInfo, device: str):
 
     try:
         model = PPO.load(path, device=device)
-    except (KeyError, ValueError, RuntimeError) as error:
-        raise AgentError(f"cannot load {path} as a PPO model: {error}") from None
+    except Exception as error:  # noqa: BLE001 - a corrupt zip fails in torch or pickle in many ways
+        raise AgentError(f"cannot load {path} as a PPO model: {_first_line(error)}") from None
     extractor = type(model.policy.features_extractor).__name__
     arch = "large" if extractor == "SharedMlp" else "small"
     return model.policy, arch
@@ -277,9 +306,7 @@ def load_agent(
     policy, arch = _load_policy(model_path, info, device)
     normalizer = None
     if normalizer_path is not None and normalizer_path.is_file():
-        with open(normalizer_path, "rb") as f:
-            normalizer = pickle.load(f)
-        normalizer.training = False
+        normalizer = load_normalizer(normalizer_path)
     return Agent(
         policy=policy,
         path=os.fspath(model_path),

@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from snakesim import runconfig
-from snakesim.config import PRESETS
+from snakesim.config import LIMITS, PRESETS
+from snakesim.files import write_atomically
 
 
 class UserError(Exception):
@@ -36,8 +37,9 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {_one_line(message)} (see {self.prog} --help)\n")
 
 
-def _int_at_least(minimum: int):
-    """An argparse type: an integer (underscores allowed) of at least `minimum`."""
+def _int_at_least(minimum: int, maximum: int | None = None):
+    """An argparse type: an integer (underscores allowed) of at least `minimum` (and at most
+    `maximum`)."""
 
     def parse(text: str) -> int:
         try:
@@ -46,6 +48,8 @@ def _int_at_least(minimum: int):
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"expected an integer <= {maximum}, got {value}")
         return value
 
     return parse
@@ -53,6 +57,9 @@ def _int_at_least(minimum: int):
 
 _positive_int = _int_at_least(1)
 _count = _int_at_least(0)
+_seed = _int_at_least(0, LIMITS["seed"])
+_threads = _int_at_least(1, LIMITS["threads"])
+_episodes = _int_at_least(1, LIMITS["eval_episodes"])
 
 
 def _seconds(text: str) -> float:
@@ -245,7 +252,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         return 0
     if args.json is not None:
         try:
-            Path(args.json).write_text(text)
+            write_atomically(args.json, lambda tmp: Path(tmp).write_text(text))
         except OSError as error:
             raise UserError(f"cannot write --json {args.json}: {error.strerror or error}") from None
     steps = report["mean_steps_to_goal"]
@@ -289,8 +296,11 @@ def cmd_plot(args: argparse.Namespace) -> int:
     out = check_writable(args.out, "--out")
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UserError(f"cannot write --out {out}: expected a .png, .pdf or .svg file")
-    drawn = plot_runs(
-        args.runs, out, title=args.title, metric=args.metric, group=args.group, spread=args.spread
+    drawn = write_atomically(
+        out,
+        lambda tmp: plot_runs(
+            args.runs, tmp, title=args.title, metric=args.metric, group=args.group, spread=args.spread
+        ),
     )
     print(f"wrote {out}: " + "; ".join(label for label, _ in drawn))
     return 0
@@ -302,6 +312,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
     outs = [check_writable(out, "--out") for out in args.out]
     kinds = [replay.check_output(out) for out in outs]
+    if len({out.resolve() for out in outs}) < len(outs):
+        raise UserError("two --out name the same file; give each its own path")
+    if any(kind != "figure" for kind in kinds):
+        replay.check_fps(args.fps)
     agent = _load_agent(args)
     rec = replay.record(
         lambda obs: agent.act(obs, args.deterministic), agent.env_kwargs, seconds=args.seconds, seed=args.seed
@@ -311,10 +325,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
     title = args.title if args.title is not None else f"PPO-{agent.arch}, {agent.joints} joints"
     for out, kind in zip(outs, kinds):
         if kind == "figure":
-            replay.draw_strip(rec, out, panels=args.panels, title=title)
+            write_atomically(out, lambda tmp: replay.draw_strip(rec, tmp, panels=args.panels, title=title))
             print(f"wrote {out} ({args.panels} moments and the path)")
         else:
-            frames = (replay.write_gif if kind == "gif" else replay.write_mp4)(rec, out, fps=args.fps)
+            writer = replay.write_gif if kind == "gif" else replay.write_mp4
+            frames = write_atomically(out, lambda tmp, writer=writer: writer(rec, tmp, fps=args.fps))
             print(f"wrote {out} ({frames} frames at {args.fps:g} fps)")
     return 0
 
@@ -355,8 +370,8 @@ def _agent_options(p: argparse.ArgumentParser) -> None:
         "--joints", type=_positive_int, help="for a bare .zip: the snake's joints (default: from the model)"
     )
     p.add_argument("--preset", choices=PRESETS, help="for a bare .zip: the robot preset (default paper)")
-    p.add_argument("--seed", type=_count, default=0, help="seed of the episodes (default 0)")
-    p.add_argument("--torch-threads", type=_positive_int, default=1, help="torch CPU threads (default 1)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of the episodes (default 0)")
+    p.add_argument("--torch-threads", type=_threads, default=1, help="torch CPU threads (default 1)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -405,7 +420,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=S,
         help=f"parallel envs (default {D['n_envs']})",
     )
-    p.add_argument("--seed", type=_count, default=S, help=f"seed (default {D['seed']})")
+    p.add_argument("--seed", type=_seed, default=S, help=f"seed (default {D['seed']})")
     p.add_argument(
         "--eval-freq",
         dest="eval_freq",
@@ -480,7 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="X,Y",
         help="a fixed goal instead of the agent's task's (e.g. 0,-10: the paper's task)",
     )
-    p.add_argument("--episodes", type=_positive_int, default=100, help="episodes (default 100)")
+    p.add_argument("--episodes", type=_episodes, default=100, help="episodes (default 100)")
     p.add_argument(
         "--stochastic", action="store_true", help="sample actions instead of the deterministic policy"
     )
@@ -521,7 +536,9 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the deterministic policy (default: sample, as the paper's snake.py test)",
     )
-    p.add_argument("--panels", type=_positive_int, default=7, help="moments in the figure (default 7)")
+    p.add_argument(
+        "--panels", type=_int_at_least(1, 24), default=7, help="moments in the figure (1-24, default 7)"
+    )
     p.add_argument(
         "--fps", type=_seconds, default=10.0, help="animation frames per simulated second (default 10)"
     )
@@ -564,6 +581,25 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"snakesim {args.command}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # Whoever read our output has gone (`snakesim evaluate ... | head -1`): stop quietly. Python
+        # would complain about the unflushed stdout at exit; point it at nothing.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except OSError as error:
+        # A full disk, a vanished directory: the system's message, with the file when it names one.
+        where = f" {error.filename}" if error.filename else ""
+        print(f"snakesim {args.command}: error:{where} {error.strerror or error}", file=sys.stderr)
+        return 1
+    except Exception as error:  # noqa: BLE001 - the last line of defence: one line, never a traceback
+        if os.environ.get("SNAKESIM_TRACEBACK"):
+            raise
+        print(
+            f"snakesim {args.command}: error: {type(error).__name__}: {_one_line(error)} "
+            "(set SNAKESIM_TRACEBACK=1 for the traceback)",
+            file=sys.stderr,
+        )
+        return 1
 
 
 if __name__ == "__main__":

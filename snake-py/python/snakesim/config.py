@@ -24,6 +24,9 @@ TABLE_KEYWORDS = ("start", "reward", "snake", "action")
 #: Every keyword an env accepts: ``task`` ("paper" or "goal") picks the defaults the others override.
 ENV_KEYWORDS = ("task", *ENV_DEFAULTS, *(k for k in TABLE_KEYWORDS if k not in ENV_DEFAULTS))
 PRESETS: tuple[str, ...] = tuple(_core.PRESETS)
+#: Every limit on sizes, ranges and durations, from the Rust side (snake-core's ``limits`` and the
+#: run configuration's).
+LIMITS: dict[str, Any] = dict(_core.LIMITS)
 
 
 def plain(value: Any, where: str) -> Any:
@@ -44,6 +47,17 @@ def plain(value: Any, where: str) -> Any:
     raise TypeError(f"{where}: expected a number, string, list or mapping, got {type(value).__name__}")
 
 
+def action_array(action: Any) -> np.ndarray:
+    """An action (or a batch) as the core takes it: float32 and float64 as they are, integers as
+    float64, half floats as float32; any other dtype is left for the core to refuse (TypeError)."""
+    array = np.asarray(action)
+    if array.dtype.kind in "iu":
+        return array.astype(np.float64)
+    if array.dtype == np.float16:
+        return array.astype(np.float32)
+    return array
+
+
 def env_config(**kwargs: Any) -> str:
     """The JSON of SnakeEnv keywords for the Rust side, which checks them. A table keyword (``start``,
     ``reward``, ``snake``) of None means its defaults."""
@@ -58,4 +72,7 @@ def env_config(**kwargs: Any) -> str:
         for key, value in kwargs.items()
         if not (key in TABLE_KEYWORDS and value is None)
     }
+    if "max_episode_steps" in table and table["max_episode_steps"] is None:
+        # No limit of the env's own: a TimeLimit wrapper truncates (what gymnasium.make adds).
+        table["max_episode_steps"] = LIMITS["episode_steps"]
     return json.dumps(table)

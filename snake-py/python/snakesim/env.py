@@ -13,7 +13,7 @@ from gymnasium import spaces
 from snakesim import _core
 from snakesim.config import ENV_DEFAULTS as _D
 from snakesim.config import GOAL_ENV_DEFAULTS as _G
-from snakesim.config import env_config
+from snakesim.config import action_array, env_config
 from snakesim.render import top_down
 
 
@@ -25,8 +25,9 @@ class SnakeEnv(gymnasium.Env):
     rewards to the paper's pybullet env for the same start and actions.
 
     **Action space**: ``Box(-1, 1, (N,), float32)``. Joint target angles, radians, times
-    ``action_scale``; actions are clipped to [-1, 1] first. NaN, a wrong shape or a non-numeric dtype
-    raise ``ValueError``. Other action modes (``action={"mode": ...}``): ``"gait"``, ``Box(-1, 1, (3,))``
+    ``action_scale``; actions are clipped to [-1, 1] first. Integer arrays are taken as numbers; NaN or
+    a wrong shape raise ``ValueError``, a non-numeric dtype ``TypeError``. Other action modes
+    (``action={"mode": ...}``): ``"gait"``, ``Box(-1, 1, (3,))``
     setting the steering, amplitude and frequency of a lateral-undulation wave within the ranges
     ``action["steering"]`` ([-0.5, 0.5] rad), ``action["amplitude"]`` ([0.2, 0.6] rad) and
     ``action["frequency"]`` ([0.4, 1.0] Hz), the wave's phase carried across steps; ``"residual"``,
@@ -46,7 +47,9 @@ class SnakeEnv(gymnasium.Env):
     episode's mechanical ``work`` (J), ``path_length`` and ``displacement`` (m) so far.
 
     **Episode end**: ``terminated`` when the goal is reached; ``truncated`` after
-    ``max_episode_steps`` env steps (5000, as ``Snake-v0``).
+    ``max_episode_steps`` env steps (5000, as ``Snake-v0``). ``max_episode_steps=None``: no limit of
+    the env's own, for a ``TimeLimit`` wrapper to truncate; ``gymnasium.make`` makes the env so and
+    truncates at the spec's 5000, or at T with ``gymnasium.make(..., max_episode_steps=T)``.
 
     **Start state**: each reset builds a fresh world, drops the snake from z = 0.5 at
     x, y ~ U(-0.5, 0.5) with heading ~ U(-0.2, 0.2) rad, and takes one physics step before the first
@@ -61,6 +64,15 @@ class SnakeEnv(gymnasium.Env):
     ``start`` (ranges of x, y, yaw and z), ``action_scale`` (1.0), ``action`` (mode and ranges;
     "joints"), ``observation`` ("paper"), ``reward`` (terms and weights), ``snake`` (physical
     parameters over the preset's), ``render_mode`` (None or "rgb_array").
+
+    **Limits**: positions (start x, y; goals) within 10 km, start heights 0-100 m, reward weights within
+    1e6, ``physics_steps_per_env_step`` at most 240, episodes at most 10^7 steps (``snakesim.config.LIMITS``
+    holds them all); a value outside raises ``ValueError`` naming the field. Observations and rewards are
+    finite, or ``step()`` raises. One env may be used from several threads: calls take turns.
+
+    **Pickling** carries the configuration only, not the episode (a Bullet world cannot be saved bit
+    for bit): the unpickled env needs ``reset()``, and its ``step()`` raises
+    ``gymnasium.error.ResetNeeded`` until then, also under wrappers that saw a reset.
 
     **Version history**: v0, the paper's env. :class:`SnakeGoalEnv` (``snakesim/SnakeGoal-v0``) is the
     same env with the goal-reaching task's defaults.
@@ -77,7 +89,7 @@ class SnakeEnv(gymnasium.Env):
         goal: Sequence[float] = tuple(_D["goal"]),
         goal_distribution: Mapping[str, Any] | None = _D["goal_distribution"],
         goal_radius: float = _D["goal_radius"],
-        max_episode_steps: int = _D["max_episode_steps"],
+        max_episode_steps: int | None = _D["max_episode_steps"],
         physics_steps_per_env_step: int = _D["physics_steps_per_env_step"],
         start: Mapping[str, Any] | None = None,
         action_scale: float = _D["action_scale"],
@@ -112,6 +124,7 @@ class SnakeEnv(gymnasium.Env):
         self.action_space = spaces.Box(-1.0, 1.0, (self._env.action_dim,), dtype=np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, (self._env.observation_dim,), dtype=np.float32)
         self._trail: list[tuple[float, float]] = []
+        self._unpickled = False
 
     @property
     def config(self) -> dict[str, Any]:
@@ -131,6 +144,7 @@ class SnakeEnv(gymnasium.Env):
             # Without a seed the first reset draws one from Gymnasium's RNG, so episodes stay random.
             seed = int(self.np_random.integers(2**63 - 1))
         self._seeded = True
+        self._unpickled = False
         obs, info = self._env.reset(
             seed, None if start is None else tuple(start), None if goal is None else tuple(goal)
         )
@@ -138,7 +152,11 @@ class SnakeEnv(gymnasium.Env):
         return obs, info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        obs, reward, terminated, truncated, info = self._env.step(np.asarray(action))
+        if self._unpickled:
+            raise gymnasium.error.ResetNeeded(
+                "this env was unpickled: a pickle carries the configuration, not the episode; call reset()"
+            )
+        obs, reward, terminated, truncated, info = self._env.step(action_array(action))
         if self.render_mode is not None:
             self._trail.append((float(obs[0]), float(obs[1])))
         return obs, reward, terminated, truncated, info
@@ -176,12 +194,15 @@ class SnakeEnv(gymnasium.Env):
     def close(self) -> None:
         pass
 
-    # Pickling keeps the arguments; the unpickled env starts fresh and needs a reset, as after __init__.
+    # A pickle carries the configuration only (what SubprocVecEnv and copies need), not an episode: the
+    # Bullet world's state cannot be saved bit for bit. The unpickled env starts fresh, as after
+    # __init__, and its step() says so until reset() is called, even under wrappers that saw a reset.
     def __getstate__(self) -> dict[str, Any]:
         return {"kwargs": self._kwargs, "render_mode": self.render_mode}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__init__(**state["kwargs"], render_mode=state["render_mode"])
+        self._unpickled = True
 
 
 class SnakeGoalEnv(SnakeEnv):
@@ -218,7 +239,7 @@ class SnakeGoalEnv(SnakeEnv):
         goal: Sequence[float] = tuple(_G["goal"]),
         goal_distribution: Mapping[str, Any] | None = _G["goal_distribution"],
         goal_radius: float = _G["goal_radius"],
-        max_episode_steps: int = _G["max_episode_steps"],
+        max_episode_steps: int | None = _G["max_episode_steps"],
         physics_steps_per_env_step: int = _G["physics_steps_per_env_step"],
         start: Mapping[str, Any] | None = None,
         action_scale: float = _G["action_scale"],

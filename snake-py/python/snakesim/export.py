@@ -10,29 +10,18 @@ before ``predict``.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from snakesim.files import write_atomically
 
 
 def vecnormalize_path(zip_path: str | os.PathLike) -> Path:
     """Where the observation statistics of an exported model go."""
     path = Path(zip_path)
     return path.with_name(f"{path.stem}_vecnormalize.pkl")
-
-
-def _replace(target: Path, write) -> None:
-    """Writes through a temporary file in the same folder and a rename: never a half-written file."""
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, target)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
@@ -79,8 +68,8 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     model.policy.load_state_dict(state)
     model.num_timesteps = int(agent.num_timesteps or 0)
     out = Path(path)
-    # SB3 appends ".zip" only to a name without a suffix; the temporary file has one.
-    _replace(out, model.save)
+    # SB3 appends ".zip" only to a name without a suffix; the temporary file ends in .zip.
+    write_atomically(out, model.save)
     written = [out]
     stats = agent.policy.obs_rms()
     if stats is not None:
@@ -90,6 +79,6 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
         normalizer.obs_rms.var = np.array(var, dtype=np.float64)
         normalizer.obs_rms.count = float(count)
         target = vecnormalize_path(out)
-        _replace(target, normalizer.save)
+        write_atomically(target, normalizer.save)
         written.append(target)
     return written

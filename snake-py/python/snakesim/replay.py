@@ -255,9 +255,28 @@ def draw_strip(
         plt.close(fig)
 
 
+#: Most frames of an animation (each frame is held in memory until the file is written: ~0.7 MB).
+MAX_FRAMES = 600
+#: Range of an animation's frames per simulated second (a GIF shows at most 50 frames a second).
+FPS_RANGE = (0.1, 50.0)
+
+
+def check_fps(fps: float) -> None:
+    """ReplayError unless ``fps`` lies in :data:`FPS_RANGE`."""
+    low, high = FPS_RANGE
+    if not (math.isfinite(fps) and low <= fps <= high):
+        raise ReplayError(f"--fps must be in [{low:g}, {high:g}], got {fps:g}")
+
+
 def frame_times(rec: Recording, fps: float) -> np.ndarray:
     """Simulated times of the animation's frames: 0, 1/fps, ... up to the recording's end."""
+    check_fps(fps)
     count = int(math.floor(rec.duration * fps + 1e-9)) + 1
+    if count > MAX_FRAMES:
+        raise ReplayError(
+            f"the animation would have {count} frames ({rec.duration:.1f} s at {fps:g} fps), more than "
+            f"{MAX_FRAMES}: lower --fps or pass --seconds"
+        )
     return np.arange(count) / fps
 
 

@@ -10,7 +10,7 @@ from gymnasium import spaces
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
 
 from snakesim import _core
-from snakesim.config import ENV_DEFAULTS, env_config
+from snakesim.config import ENV_DEFAULTS, action_array, env_config
 
 
 class SnakeVecEnv(VecEnv):
@@ -63,7 +63,7 @@ class SnakeVecEnv(VecEnv):
     def step_wait(self) -> VecEnvStepReturn:
         if self._actions is None:
             raise RuntimeError("step_wait() called without step_async()")
-        obs, rewards, terminated, truncated, finals = self._core.step(np.asarray(self._actions))
+        obs, rewards, terminated, truncated, finals = self._core.step(action_array(self._actions))
         self._actions = None
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         for index, final_obs, final_info in finals:

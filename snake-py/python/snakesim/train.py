@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import agents, runconfig
+from snakesim.files import write_atomically
 
 EVAL_FIELDS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
 EVALUATIONS_FILE = "evaluations.csv"
@@ -115,7 +116,18 @@ def read_evaluations(path: str | os.PathLike) -> list[dict[str, float]]:
             raise ValueError(
                 f"{os.fspath(path)} is not an evaluations.csv (expected columns {', '.join(EVAL_FIELDS)})"
             )
-        return [{key: float(row[key]) for key in EVAL_FIELDS} for row in reader]
+        rows = []
+        for row in reader:
+            try:
+                rows.append({key: float(row[key]) for key in EVAL_FIELDS})
+            except (TypeError, ValueError):
+                raise ValueError(_bad_row(path, reader.line_num, row.values())) from None
+        return rows
+
+
+def _bad_row(path: str | os.PathLike, line: int, cells) -> str:
+    text = ",".join(str(c) for c in cells if c is not None)
+    return f"{os.fspath(path)}: line {line} is not an evaluation row: {text[:80]!r}"
 
 
 class _Callback:
@@ -240,7 +252,12 @@ class Trainer:
                 )
             meta = self.resume_from[1].with_suffix(".json")
             if meta.is_file():
-                self.wall_offset = float(json.loads(meta.read_text()).get("wall_time", 0.0))
+                try:
+                    self.wall_offset = float(json.loads(meta.read_text())["wall_time"])
+                except (ValueError, TypeError, KeyError, OSError) as error:
+                    raise RunDirError(
+                        f"cannot resume {self.run_dir}: {meta} is corrupt ({type(error).__name__}: {error})"
+                    ) from None
         else:
             config = runconfig.resolve(overrides)
             self.run_dir = Path(run_dir) if run_dir is not None else default_run_dir(config)
@@ -283,11 +300,25 @@ class Trainer:
                 reader = csv.reader(f)
                 next(reader, None)
                 limit = self.resume_from[0] if self.resume_from else 0
-                rows = [row for row in reader if row and float(row[0]) <= limit]
-        with open(path, "w", newline="", encoding="utf-8") as f:
-            writer = csv.writer(f)
-            writer.writerow(EVAL_FIELDS)
-            writer.writerows(rows)
+                for row in reader:
+                    if not row:
+                        continue
+                    try:
+                        values = [float(cell) for cell in row]
+                    except ValueError:
+                        values = []
+                    if len(values) != len(EVAL_FIELDS):
+                        raise RunDirError(_bad_row(path, reader.line_num, row))
+                    if values[0] <= limit:
+                        rows.append(row)
+
+        def write(tmp: str) -> None:
+            with open(tmp, "w", newline="", encoding="utf-8") as f:
+                writer = csv.writer(f)
+                writer.writerow(EVAL_FIELDS)
+                writer.writerows(rows)
+
+        write_atomically(path, write)
 
     def _append_evaluation(self, row: Mapping[str, Any]) -> None:
         with open(self.run_dir / EVALUATIONS_FILE, "a", newline="", encoding="utf-8") as f:
@@ -308,7 +339,13 @@ class Trainer:
         if self.resume_from is not None:
             stats = agents.checkpoint_paths(self.run_dir, self.resume_from[0])[1]
             if stats.is_file():
-                venv = VecNormalize.load(os.fspath(stats), venv)
+                try:
+                    venv = VecNormalize.load(os.fspath(stats), venv)
+                except Exception as error:  # noqa: BLE001 - unpickling garbage fails in many ways
+                    raise RunDirError(
+                        f"cannot resume {self.run_dir}: {stats} is not a VecNormalize pickle "
+                        f"({type(error).__name__}: {error})"
+                    ) from None
                 venv.training = True
                 return venv
             self.log(f"note: {stats} is missing; observation statistics start afresh")
@@ -322,9 +359,16 @@ class Trainer:
         tb = os.fspath(self.run_dir / TB_DIR)
         if self.resume_from is not None:
             steps, path = self.resume_from
-            model = PPO.load(
-                path, env=venv, device=self.config["device"], tensorboard_log=tb, verbose=self.verbose
-            )
+            try:
+                model = PPO.load(
+                    path, env=venv, device=self.config["device"], tensorboard_log=tb, verbose=self.verbose
+                )
+            except Exception as error:  # noqa: BLE001 - a corrupt zip fails in torch or pickle in many ways
+                first = (str(error).strip().splitlines() or [""])[0]
+                raise RunDirError(
+                    f"cannot resume {self.run_dir}: {path} is not a loadable checkpoint "
+                    f"({type(error).__name__}: {first}); delete it to resume from the one before"
+                ) from None
             # A fresh env: start new episodes (the saved last observation belongs to the old env), and
             # seed them apart from the episodes seen before.
             model._last_obs = None

@@ -11,7 +11,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from snakesim import _core
-from snakesim.config import env_config
+from snakesim.config import action_array, env_config
 
 
 class SnakeVectorEnv(VectorEnv):
@@ -50,7 +50,7 @@ class SnakeVectorEnv(VectorEnv):
         return self._core.reset(seed), {}
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        obs, rewards, terminated, truncated, finals = self._core.step(np.asarray(actions))
+        obs, rewards, terminated, truncated, finals = self._core.step(action_array(actions))
         infos: dict[str, Any] = {}
         for index, final_obs, final_info in finals:
             infos = self._add_info(infos, {"final_obs": final_obs, "final_info": final_info}, index)

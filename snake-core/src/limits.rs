@@ -1,0 +1,59 @@
+//! Limits on what a configuration, a reset or a command may ask for. Each keeps a typo or a hostile
+//! value from giving silently non-finite numbers, physics that no longer resolves the snake, or a call
+//! that never returns; everything that checks a size, a range or a duration takes it from here.
+
+pub use crate::config::MAX_JOINTS;
+
+/// Largest |x| or |y| of a start position or a goal, metres (10 km). Far inside what double-precision
+/// physics resolves (at 10 km a position is exact to ~2e-12 m, against cubes of 0.25 m; at 1e18 m the
+/// contacts no longer work and the snake leaves the plane), and where the float32 observation still
+/// resolves ~1 mm.
+pub const MAX_POSITION: f64 = 1.0e4;
+
+/// Highest start height of the base, metres (the snake drops onto the plane from there).
+pub const MAX_START_HEIGHT: f64 = 100.0;
+
+/// Largest |yaw| of a start pose, radians.
+pub const MAX_YAW: f64 = 1.0e3;
+
+/// Largest |weight| of a reward term and of the success reward: with distances below ~3e4 m, episodes
+/// below [`MAX_EPISODE_STEPS`] and bounded torques, every reward and return stays finite.
+pub const MAX_REWARD_WEIGHT: f64 = 1.0e6;
+
+/// Largest `action_scale` (radians of joint target per unit of action).
+pub const MAX_ACTION_SCALE: f64 = 100.0;
+
+/// Most env steps of an episode.
+pub const MAX_EPISODE_STEPS: u64 = 10_000_000;
+
+/// Most physics steps per env step (1 s of simulated time at 240 Hz): one `step()` call stays short
+/// enough to be interrupted between calls.
+pub const MAX_PHYSICS_STEPS_PER_ENV_STEP: u32 = 240;
+
+/// Most environments of one batched env.
+pub const MAX_ENVS: usize = 1024;
+
+/// Longest simulated duration of one command-line run, seconds (one hour: 864,000 physics steps).
+pub const MAX_RUN_SECONDS: f64 = 3600.0;
+
+/// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
+pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
+    if value.is_finite() && (low..=high).contains(&value) {
+        Ok(())
+    } else {
+        Err(crate::error::invalid(format!(
+            "{what} must be in [{low}, {high}], got {value:?}"
+        )))
+    }
+}
+
+/// Checks a planar position (a goal, a start's x and y) against [`MAX_POSITION`].
+pub fn check_position(what: &str, x: f64, y: f64) -> crate::Result<()> {
+    if x.is_finite() && y.is_finite() && x.abs() <= MAX_POSITION && y.abs() <= MAX_POSITION {
+        Ok(())
+    } else {
+        Err(crate::error::invalid(format!(
+            "{what} must have |x| and |y| at most {MAX_POSITION} m, got ({x:?}, {y:?})"
+        )))
+    }
+}
