@@ -1,0 +1,135 @@
+"""Property tests (hypothesis) over the env's constructor, reset options and actions: whatever a user
+passes, the env returns finite observations and rewards or raises a ValueError, TypeError or (physics
+that blew up) RuntimeError; nothing else, never a crash or a hang."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
+from snakesim import SnakeEnv
+from snakesim.config import ENV_KEYWORDS
+
+# Examples per property: each builds a world and steps it a few times (~5 ms).
+EXAMPLES = 500
+USER_ERRORS = (ValueError, TypeError, RuntimeError)
+
+anything = st.recursive(
+    st.one_of(
+        st.none(),
+        st.booleans(),
+        st.integers(),
+        st.floats(),
+        st.text(max_size=4),
+    ),
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=4),
+        st.tuples(inner, inner),
+        st.dictionaries(st.text(max_size=12), inner, max_size=3),
+    ),
+    max_leaves=6,
+)
+plausible = {
+    "joints": st.integers(1, 6),
+    "preset": st.sampled_from(["paper", "snakebot-gym"]),
+    "task": st.sampled_from(["paper", "goal"]),
+    "goal": st.tuples(st.floats(-30, 30), st.floats(-30, 30)),
+    "goal_radius": st.floats(0, 3),
+    "max_episode_steps": st.integers(1, 50),
+    "physics_steps_per_env_step": st.integers(1, 12),
+    "action_scale": st.floats(0.01, 3),
+    "observation": st.sampled_from(["paper", "extended"]),
+    "action": st.fixed_dictionaries({"mode": st.sampled_from(["joints", "gait", "residual"])}),
+    "reward": st.dictionaries(
+        st.sampled_from(["distance_weight", "progress_weight", "smoothness_weight", "energy_weight"]),
+        st.floats(-3, 3),
+        max_size=3,
+    ),
+    "start": st.fixed_dictionaries({"z": st.floats(0, 1)}),
+    "goal_distribution": st.one_of(
+        st.none(), st.fixed_dictionaries({"distance": st.tuples(st.floats(0, 5), st.floats(5, 20))})
+    ),
+    "snake": st.dictionaries(
+        st.sampled_from(["link_mass", "base_mass", "motor_force", "lateral_friction"]),
+        st.floats(0.01, 20),
+        max_size=2,
+    ),
+}
+
+
+@st.composite
+def env_kwargs(draw):
+    """Keywords mostly plausible, some holding anything at all, now and then an unknown one."""
+    kwargs = {}
+    for key in draw(st.lists(st.sampled_from(ENV_KEYWORDS), unique=True, max_size=5)):
+        wild = draw(st.integers(0, 9)) == 0
+        kwargs[key] = draw(anything if wild else plausible[key])
+    if draw(st.integers(0, 19)) == 0:
+        kwargs[draw(st.text(min_size=1, max_size=8))] = draw(anything)
+    return kwargs
+
+
+def numbers(n):
+    return st.lists(st.floats(width=32), min_size=n, max_size=n)
+
+
+@st.composite
+def reset_options(draw):
+    options = {}
+    if draw(st.booleans()):
+        options["start"] = draw(
+            st.one_of(st.tuples(*[st.floats(-3, 3)] * 2, st.floats(0, 1), st.floats(-4, 4)), anything)
+        )
+    if draw(st.booleans()):
+        options["goal"] = draw(st.one_of(st.tuples(st.floats(-30, 30), st.floats(-30, 30)), anything))
+    if draw(st.integers(0, 19)) == 0:
+        options["bogus"] = 1
+    return options
+
+
+@st.composite
+def action_arrays(draw, dim):
+    kind = draw(st.integers(0, 9))
+    if kind == 0:  # any shape, any dtype
+        dtype = draw(st.sampled_from([np.float32, np.float64, np.int64, np.bool_, np.complex64, object]))
+        shape = draw(st.lists(st.integers(0, 4), max_size=3))
+        return np.zeros(shape, dtype=dtype)
+    if kind == 1:  # right shape, any float
+        return np.array(draw(numbers(dim)), dtype=np.float32)
+    return np.array(draw(st.lists(st.floats(-1.5, 1.5), min_size=dim, max_size=dim)), dtype=np.float32)
+
+
+def finite(obs, reward=0.0):
+    return bool(np.isfinite(obs).all()) and math.isfinite(reward)
+
+
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(kwargs=env_kwargs(), options=reset_options(), seed=st.integers(0, 2**64 - 1), data=st.data())
+def test_env_is_finite_or_a_typed_error(kwargs, options, seed, data):
+    try:
+        env = SnakeEnv(**kwargs)
+    except USER_ERRORS as error:
+        event(f"refused: {type(error).__name__}")
+        return
+    try:
+        obs, _ = env.reset(seed=seed, options=options)
+    except USER_ERRORS as error:
+        event(f"reset refused: {type(error).__name__}")
+        return
+    event("env built and reset")
+    assert finite(obs)
+    dim = env.action_space.shape[0]
+    for _ in range(data.draw(st.integers(1, 8))):
+        action = data.draw(action_arrays(dim))
+        try:
+            obs, reward, terminated, truncated, _ = env.step(action)
+        except USER_ERRORS as error:
+            event(f"step refused: {type(error).__name__}")
+            continue
+        event("stepped")
+        assert finite(obs, reward)
+        assert obs.shape == env.observation_space.shape and obs.dtype == np.float32
+        if terminated or truncated:
+            break
