@@ -49,7 +49,12 @@ pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result
 
 /// Checks a planar position (a goal, a start's x and y) against [`MAX_POSITION`].
 pub fn check_position(what: &str, x: f64, y: f64) -> crate::Result<()> {
-    if x.is_finite() && y.is_finite() && x.abs() <= MAX_POSITION && y.abs() <= MAX_POSITION {
+    if !(x.is_finite() && y.is_finite()) {
+        return Err(crate::error::invalid(format!(
+            "{what} must be finite, got ({x:?}, {y:?})"
+        )));
+    }
+    if x.abs() <= MAX_POSITION && y.abs() <= MAX_POSITION {
         Ok(())
     } else {
         Err(crate::error::invalid(format!(

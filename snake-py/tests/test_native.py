@@ -255,11 +255,7 @@ def test_ctrl_c_saves_and_resume_continues(tmp_path):
     [
         (["train", "--trainer", "native", "--set", "ppo.batch_size=1"], "ppo.batch_size: must be in [2,"),
         (["train", "--trainer", "native", "--threads", "100000"], "threads: must be in [1, 256]"),
-        pytest.param(
-            ["train", "--trainer", "native", "--set", "env.goal=[1e39, 0]"],
-            "env.goal",
-            marks=pytest.mark.xfail(strict=True, reason="position limits arrive with issue 12's hardening"),
-        ),
+        (["train", "--trainer", "native", "--set", "env.goal=[1e39, 0]"], "env.goal: must have |x| and |y|"),
         (["export", "{run}", "--sb3", "{tmp}/out.txt"], "expected a .zip file"),
         (["evaluate", "{tmp}/garbage.safetensors"], "corrupt or truncated safetensors file"),
         (["train", "--run-dir", "{run}", "--resume", "--seed", "3"], "cannot change seed when resuming"),

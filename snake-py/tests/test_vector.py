@@ -80,7 +80,7 @@ def test_gymnasium_vector_env_same_step_autoreset():
     [
         (np.zeros((2, 3), np.float32), ValueError, r"shape \(3, 2\)"),
         (np.zeros(6, np.float32), ValueError, "2-D"),
-        (np.zeros((3, 2), np.int32), TypeError, "float32 or float64"),
+        (np.zeros((3, 2), np.complex64), TypeError, "float32 or float64"),
         (np.full((3, 2), np.nan), ValueError, "finite"),
     ],
 )

@@ -788,7 +788,7 @@ mod tests {
         assert!(error("env: {snake: {link_mass: -1}}")
             .starts_with("env.snake.link_mass: must be positive"));
         assert!(
-            error("env: {goal_radius: -1}").starts_with("env.goal_radius: must be finite and >= 0")
+            error("env: {goal_radius: -1}").starts_with("env.goal_radius: must be in [0, 10000]")
         );
         assert!(error("- 1").starts_with("a configuration must be a mapping"));
         assert!(error("ppo: [1").starts_with("not valid YAML (line 2, column 1): did not find"));

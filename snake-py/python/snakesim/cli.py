@@ -299,7 +299,13 @@ def cmd_plot(args: argparse.Namespace) -> int:
     drawn = write_atomically(
         out,
         lambda tmp: plot_runs(
-            args.runs, tmp, title=args.title, metric=args.metric, group=args.group, spread=args.spread
+            args.runs,
+            tmp,
+            title=args.title,
+            metric=args.metric,
+            group=args.group,
+            spread=args.spread,
+            x=args.x,
         ),
     )
     print(f"wrote {out}: " + "; ".join(label for label, _ in drawn))
@@ -518,6 +524,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="auto: runs differing only in seed are one line (mean, shaded spread)",
     )
     p.add_argument("--spread", choices=("minmax", "std"), default="minmax", help="the shaded band of a group")
+    p.add_argument(
+        "--x",
+        choices=("timesteps", "wall_time"),
+        default="timesteps",
+        help="the x axis: timesteps, or the wall time of training (default timesteps)",
+    )
     p.set_defaults(func=cmd_plot)
 
     p = sub.add_parser("replay", help="the snake at successive moments (Figure 4) and animations")

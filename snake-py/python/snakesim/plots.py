@@ -32,12 +32,17 @@ class PlotError(ValueError):
     """Runs that cannot be plotted; the message says why."""
 
 
+#: The x axes a plot can have, with their labels.
+X_AXES = {"timesteps": "timesteps", "wall_time": "wall time of training [s]"}
+
+
 @dataclasses.dataclass
 class Curve:
     name: str
     config: dict[str, Any] | None
     timesteps: np.ndarray
     values: dict[str, np.ndarray]
+    wall_time: np.ndarray | None = None
 
 
 def load_curve(source: str | os.PathLike) -> Curve:
@@ -64,8 +69,9 @@ def load_curve(source: str | os.PathLike) -> Curve:
     rows.sort(key=lambda row: row["timesteps"])
     timesteps = np.array([row["timesteps"] for row in rows])
     values = {metric: np.array([row[metric] for row in rows]) for metric in METRICS}
+    wall_time = np.array([row["wall_time"] for row in rows])
     name = (path if path.is_dir() else run_dir).resolve().name
-    return Curve(name, config, timesteps, values)
+    return Curve(name, config, timesteps, values, wall_time)
 
 
 def _experiment_key(config: Mapping[str, Any] | None, name: str) -> str:
@@ -126,14 +132,22 @@ def plot_runs(
     metric: str = "mean_return",
     group: str = "auto",
     spread: str = "minmax",
+    x: str = "timesteps",
     dpi: int = 150,
 ) -> list[tuple[str, int]]:
-    """Draws the curves into ``out`` (PNG, PDF or SVG by its suffix); returns (label, runs) per line."""
+    """Draws the curves into ``out`` (PNG, PDF or SVG by its suffix) against ``x`` (``timesteps`` or
+    ``wall_time``, the run's seconds of training); returns (label, runs) per line."""
+    if x not in X_AXES:
+        raise PlotError(f"unknown x axis {x!r} (expected one of: {', '.join(X_AXES)})")
+    axis = x
     if metric not in METRICS:
         raise PlotError(f"unknown metric {metric!r} (expected one of: {', '.join(METRICS)})")
     if spread not in ("minmax", "std"):
         raise PlotError(f"unknown spread {spread!r} (expected minmax or std)")
     curves = [load_curve(source) for source in sources]
+    if axis == "wall_time":
+        # The same curves drawn against each evaluation's wall time instead of its timesteps.
+        curves = [dataclasses.replace(c, timesteps=c.wall_time) for c in curves]
     import matplotlib
 
     matplotlib.use("Agg")
@@ -153,7 +167,7 @@ def plot_runs(
             if len(members) > 1:
                 ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, linewidth=0)
             drawn.append((label, len(members)))
-        ax.set_xlabel("timesteps")
+        ax.set_xlabel(X_AXES[axis])
         ax.set_ylabel(METRICS[metric])
         ax.set_title(title if title is not None else TITLES[metric])
         ax.grid(True, alpha=0.3)
