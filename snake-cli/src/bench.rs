@@ -64,7 +64,8 @@ fn one_run(joints: usize, steps: u64) -> Result<f64> {
     Ok(steps as f64 / clock.elapsed().as_secs_f64())
 }
 
-fn find_python(explicit: Option<&Path>) -> Option<PathBuf> {
+/// A Python of the project: `explicit`, else $SNAKESIM_PYTHON, else .venv/bin/python here or in the repository.
+pub(crate) fn find_python(explicit: Option<&Path>) -> Option<PathBuf> {
     if let Some(p) = explicit {
         return Some(p.to_path_buf());
     }

@@ -4,7 +4,9 @@ mod bench;
 mod env_run;
 mod output;
 mod plot;
+mod recording;
 mod run;
+mod trace;
 mod train;
 mod trajectory;
 
@@ -22,7 +24,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a gait and report the snake's motion; optionally write the trajectory (CSV) and a plot (PNG).
+    /// Run a gait and report the snake's motion; optionally write the trajectory (CSV), a plot (PNG)
+    /// and a Rerun recording (.rrd).
     Run(run::RunArgs),
     /// Run episodes of the RL environment with a fixed policy (random, zero or the gait).
     Env(env_run::EnvArgs),

@@ -9,6 +9,8 @@ use snake_core::{Gait, GaitKind, LateralUndulation, Preset, Snake, StartPose};
 
 use crate::output::{check_distinct, say, OutputFile};
 use crate::plot::{self, PathPlot};
+use crate::recording::{self, Converter};
+use crate::trace::TraceWriter;
 use crate::trajectory::TrajectoryWriter;
 
 /// Arguments of `snake-cli run`.
@@ -38,6 +40,16 @@ pub struct RunArgs {
     /// Draw the path seen from above, with the snake's pose at regular moments, as PNG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Write the full state after every physics step (cube poses, joint angles, velocities, torques,
+    /// targets) as CSV: the physics trace that `snakesim convert` turns into a Rerun recording.
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
+    /// Write a Rerun recording (.rrd) of the run: the cubes in 3D at every physics step and plots of
+    /// the joints. Open it with `.venv/bin/rerun FILE` or `snakesim view FILE --serve`. Needs the
+    /// snakesim Python package (`bash scripts/setup`): found as $SNAKESIM_PYTHON, .venv/bin/python or
+    /// the `snakesim` command.
+    #[arg(long)]
+    pub rrd: Option<PathBuf>,
 }
 
 fn parse_start(text: &str) -> Result<StartPose, String> {
@@ -90,10 +102,53 @@ pub fn run(args: &RunArgs) -> Result<()> {
 
     // Check the outputs first: a bad path or format fails before any simulation time is spent, and
     // nothing replaces an existing file until its new contents are complete.
-    if let (Some(csv), Some(png)) = (&args.output, &args.plot) {
-        check_distinct(&[("--output", csv), ("--plot", png)])?;
+    let outputs: Vec<(&str, &std::path::Path)> = [
+        ("--output", &args.output),
+        ("--plot", &args.plot),
+        ("--trace", &args.trace),
+        ("--rrd", &args.rrd),
+    ]
+    .into_iter()
+    .filter_map(|(flag, path)| path.as_deref().map(|p| (flag, p)))
+    .collect();
+    check_distinct(&outputs)?;
+    if args.rrd.is_some() {
+        recording::check_seconds(args.seconds)?;
     }
+    let rrd_file = args
+        .rrd
+        .as_deref()
+        .map(|p| OutputFile::new(p, "recording", &["rrd"]))
+        .transpose()?;
+    // Before any simulation: the recording's converter must be there.
+    let converter = args.rrd.as_ref().map(|_| Converter::find()).transpose()?;
     let plot_file = args.plot.as_deref().map(plot::output).transpose()?;
+    // The trace goes to --trace, or (for --rrd alone) to a temporary file.
+    let trace_file = match (&args.trace, &rrd_file) {
+        (Some(p), _) => Some(recording::TraceFile::Output(OutputFile::new(
+            p,
+            "trace",
+            &["csv"],
+        )?)),
+        (None, Some(_)) => Some(recording::TraceFile::temporary()?),
+        (None, None) => None,
+    };
+    let meta = serde_json::json!({
+        "source": "snake-cli run",
+        "joints": args.joints,
+        "dt": config.dt,
+        "half_extent": config.half_extent,
+        "preset": args.preset.to_string(),
+        "seconds": args.seconds,
+        "steps": steps,
+        "start": {"x": start.x, "y": start.y, "z": start.z, "yaw": start.yaw},
+        "gait": &gait,
+        "snake": &config,
+    });
+    let mut trace = trace_file
+        .as_ref()
+        .map(|f| TraceWriter::create(f.write_path(), f.shown_path(), args.joints, &meta))
+        .transpose()?;
     let mut csv = args
         .output
         .as_deref()
@@ -116,6 +171,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
         snake.step().with_context(|| format!("at step {step}"))?;
         if let Some(csv) = csv.as_mut() {
             csv.record(&snake)?;
+        }
+        if let Some(trace) = trace.as_mut() {
+            trace.record(&snake, &targets)?;
         }
         if step % 24 == 0 || step == steps {
             path.trace(&snake)?;
@@ -177,6 +235,22 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
         path.draw(file, &title)?;
         say!("wrote {}", out.display())?;
+    }
+    if let (Some(trace), Some(file)) = (trace, trace_file) {
+        trace.finish()?;
+        let path = file.commit()?;
+        if let Some(shown) = &args.trace {
+            say!("wrote {} ({steps} rows)", shown.display())?;
+        }
+        if let (Some(rrd), Some(converter)) = (rrd_file, converter) {
+            let out = rrd.path().to_path_buf();
+            converter.convert(&path, rrd.temp_path(), &out)?;
+            rrd.commit()?;
+            say!(
+                "wrote {} (open it with: .venv/bin/rerun {0})",
+                out.display()
+            )?;
+        }
     }
     Ok(())
 }

@@ -75,6 +75,88 @@ fn run_csv_matches_pybullet() {
     }
 }
 
+/// `snake-cli run --trace` (the physics trace behind `--rrd`) holds pybullet's base pose, joint
+/// angles, velocities and motor torques after every step, bit for bit, and the gait's targets.
+#[test]
+fn run_trace_matches_pybullet() {
+    let scenario = Scenario::new(
+        "trace-5-paper",
+        5,
+        "paper",
+        [0.0, 0.0, 0.25, 0.0],
+        480,
+        "gait",
+    );
+    let Some(reference) = run_reference(std::slice::from_ref(&scenario), "trace") else {
+        return;
+    };
+    let trace = temp("trace-5.csv");
+    let out = snake_cli(&[
+        "run",
+        "--joints",
+        "5",
+        "--seconds",
+        "2",
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let (meta, rest) = text.split_once('\n').unwrap();
+    let meta: serde_json::Value = serde_json::from_str(
+        meta.strip_prefix("# snakesim physics trace 1 ")
+            .expect("metadata line"),
+    )
+    .unwrap();
+    assert_eq!(meta["joints"], 5);
+    assert_eq!(meta["steps"], 480);
+    let body = temp("trace-5-body.csv");
+    std::fs::write(&body, rest).unwrap();
+    let ours = read_csv(&body);
+    let table = &reference[0];
+    // (ours, reference) column pairs: the head cube is the base.
+    let mut pairs: Vec<(String, String)> =
+        vec![("step".into(), "step".into()), ("t".into(), "t".into())];
+    for k in ["x", "y", "z", "qx", "qy", "qz", "qw"] {
+        pairs.push((format!("c0_{k}"), format!("base_{k}")));
+    }
+    for prefix in ["q", "qd", "tau"] {
+        for j in 0..5 {
+            pairs.push((format!("{prefix}{j}"), format!("{prefix}{j}")));
+        }
+    }
+    let pick = |table: &snakesim_tests::Table, names: Vec<&String>| -> Vec<Vec<f64>> {
+        let idx: Vec<usize> = names
+            .iter()
+            .map(|n| {
+                table
+                    .header
+                    .iter()
+                    .position(|h| h == *n)
+                    .unwrap_or_else(|| panic!("no column {n}"))
+            })
+            .collect();
+        table
+            .rows
+            .iter()
+            .map(|r| idx.iter().map(|&i| r[i]).collect())
+            .collect()
+    };
+    let names: Vec<String> = pairs.iter().map(|(a, _)| a.clone()).collect();
+    let mine = pick(&ours, pairs.iter().map(|p| &p.0).collect());
+    let theirs = pick(table, pairs.iter().map(|p| &p.1).collect());
+    assert_identical("trace", &names, &theirs, &mine);
+    // The targets are the gait's: a wave of amplitude 0.4 rad at most.
+    let target_names: Vec<String> = (0..5).map(|j| format!("target{j}")).collect();
+    let targets = pick(&ours, target_names.iter().collect());
+    let max = targets.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(max > 0.3 && max <= 0.4 + 1e-12, "{max}");
+}
+
 #[test]
 fn run_writes_a_png_plot() {
     let png = temp("path.png");
@@ -194,6 +276,19 @@ fn bad_input_is_one_clear_line() {
         (&["bench", "--repeats", "1000000"], "--repeats must be in"),
         (&["bench", "--joints", "100000"], "--joints needs"),
         (&["run", "--plot", "keep.txt"], "must end in .png"),
+        (&["run", "--trace", "keep.txt"], "must end in .csv"),
+        (
+            &["run", "--rrd", "/nonexistent-dir/x.rrd"],
+            "cannot write recording",
+        ),
+        (
+            &["run", "--seconds", "601", "--rrd", "x.rrd"],
+            "--rrd records at most 600",
+        ),
+        (
+            &["run", "--output", "same.rrd", "--rrd", "./same.rrd"],
+            "--output and --rrd name the same file",
+        ),
     ];
     for (args, needle) in cases {
         let out = snake_cli(args);

@@ -7,6 +7,7 @@ mod observation;
 mod reward;
 #[cfg(test)]
 mod tests;
+mod trace;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
@@ -20,6 +21,7 @@ pub use config::{
     EnvConfig, GoalDistribution, ObservationLayout, StartDistribution, Task, MAX_GOAL_DISTANCE,
 };
 pub use reward::{paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardTerms};
+pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
 use crate::math::StartPose;
@@ -225,6 +227,8 @@ pub struct SnakeEnv {
     position: (f64, f64),
     work: f64,
     path_length: f64,
+    /// The latest reset's or step's physics steps, when on.
+    trace: Option<PhysicsTrace>,
 }
 
 impl SnakeEnv {
@@ -257,7 +261,23 @@ impl SnakeEnv {
             targets: vec![0.0; n],
             joints: JointScratch::new(n),
             torques: vec![0.0; n],
+            trace: None,
         })
+    }
+
+    /// Turns the physics trace on or off (off by default). While on, every reset and step records
+    /// the snake's full state after each of its physics steps (cube poses, joint angles, velocities,
+    /// motor torques and targets), read back with [`SnakeEnv::physics_trace`]. Recording only reads
+    /// the world: observations and rewards are the same bits either way.
+    pub fn set_physics_trace(&mut self, on: bool) {
+        self.trace = on.then(|| PhysicsTrace::new(self.config.joints()));
+    }
+
+    /// The physics steps of the latest reset or step, if the trace is on (see
+    /// [`SnakeEnv::set_physics_trace`]): empty before the first reset; after a failed call, the
+    /// steps before the failure.
+    pub fn physics_trace(&self) -> Option<&PhysicsTrace> {
+        self.trace.as_ref()
     }
 
     /// The configuration.
@@ -351,9 +371,15 @@ impl SnakeEnv {
         // Drop the old world first: at most one world per env is alive at a time.
         self.snake = None;
         self.phase = Phase::NeedsReset;
+        if let Some(trace) = self.trace.as_mut() {
+            trace.clear();
+        }
         let mut snake = Snake::new(&self.config.snake, start)?;
         // The paper steps once before the first observation.
         snake.step()?;
+        if let Some(trace) = self.trace.as_mut() {
+            trace.record(&snake, None)?;
+        }
         self.goal = goal;
         self.start = start;
         self.episode_step = 0;
@@ -443,6 +469,10 @@ impl SnakeEnv {
         let mut work = 0.0;
         let driver = &mut self.driver;
         let per_physics_step = driver.per_physics_step();
+        let mut trace = self.trace.as_mut();
+        if let Some(trace) = trace.as_mut() {
+            trace.clear();
+        }
         let result = (|| -> Result<observation::BaseState> {
             if !per_physics_step {
                 driver.next_targets(&mut self.targets);
@@ -468,6 +498,9 @@ impl SnakeEnv {
                     .map(|(t, v)| (t * v).abs())
                     .sum();
                 work += power * dt;
+                if let Some(trace) = trace.as_mut() {
+                    trace.record(snake, Some(&self.targets))?;
+                }
             }
             let phase = per_physics_step.then(|| driver.wave_phase());
             observation::write(

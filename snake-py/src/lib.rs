@@ -229,6 +229,37 @@ impl Env {
         let cubes = flat.len() / 7;
         Ok(PyArray1::from_vec(py, flat).reshape([cubes, 7])?.into_any())
     }
+
+    /// Turns the physics trace on or off (see `physics_trace`).
+    fn set_physics_trace(&self, py: Python<'_>, on: bool) {
+        self.with(py, |env| env.set_physics_trace(on));
+    }
+
+    /// The state after each physics step of the latest reset or step (the trace must be on), as a
+    /// dict of arrays with K rows: steps (K,) uint64, times (K,), poses (K, N + 1, 7), positions,
+    /// velocities, torques and targets (K, N); None while the trace is off.
+    fn physics_trace<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(trace) = self.with(py, |env| env.physics_trace().cloned()) else {
+            return Ok(None);
+        };
+        let (k, n) = (trace.len(), trace.joints);
+        let d = PyDict::new(py);
+        d.set_item("steps", PyArray1::from_vec(py, trace.steps))?;
+        d.set_item("times", PyArray1::from_vec(py, trace.times))?;
+        d.set_item(
+            "poses",
+            PyArray1::from_vec(py, trace.poses).reshape([k, n + 1, 7])?,
+        )?;
+        for (name, values) in [
+            ("positions", trace.positions),
+            ("velocities", trace.velocities),
+            ("torques", trace.torques),
+            ("targets", trace.targets),
+        ] {
+            d.set_item(name, PyArray1::from_vec(py, values).reshape([k, n])?)?;
+        }
+        Ok(Some(d))
+    }
 }
 
 /// Many snake environments stepped together on threads (see `snakesim.SnakeVecEnv`).

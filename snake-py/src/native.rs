@@ -460,6 +460,7 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     )?;
     d.set_item("envs", core::MAX_ENVS)?;
     d.set_item("run_seconds", core::MAX_RUN_SECONDS)?;
+    d.set_item("recording_seconds", core::MAX_RECORDING_SECONDS)?;
     d.set_item("timesteps", run::MAX_TIMESTEPS)?;
     d.set_item("eval_episodes", run::MAX_EVAL_EPISODES)?;
     d.set_item("threads", run::MAX_THREADS)?;

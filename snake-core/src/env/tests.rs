@@ -490,3 +490,97 @@ fn limits_refuse_what_would_not_be_finite_or_resolved() {
         "resting on the plane"
     );
 }
+
+/// The physics trace records every physics step's state without changing a bit of the episode.
+#[test]
+fn physics_trace_records_every_physics_step_and_changes_nothing() {
+    for config in [
+        EnvConfig::goal_task(Preset::Paper, 5),
+        EnvConfig {
+            physics_steps_per_env_step: 3,
+            ..EnvConfig::snakebot_gym(4)
+        },
+    ] {
+        let per_step = config.physics_steps_per_env_step as usize;
+        let n = config.joints();
+        let mut plain = env(config.clone());
+        let mut traced = env(config.clone());
+        assert!(traced.physics_trace().is_none());
+        traced.set_physics_trace(true);
+        assert!(traced.physics_trace().unwrap().is_empty());
+        let (obs_a, _) = plain.reset(Some(3), ResetOptions::default()).unwrap();
+        let (obs_b, _) = traced.reset(Some(3), ResetOptions::default()).unwrap();
+        assert_eq!(obs_a, obs_b);
+        let trace = traced.physics_trace().unwrap();
+        assert_eq!((trace.len(), trace.steps[0], trace.joints), (1, 1, n));
+        assert!(trace.targets.iter().all(|t| t.is_nan()));
+        let mut work = 0.0;
+        for k in 0..40u64 {
+            let action: Vec<f64> = (0..plain.action_dim())
+                .map(|j| ((k as f64) * 0.3 + j as f64).sin())
+                .collect();
+            let a = plain.step(&action).unwrap();
+            let b = traced.step(&action).unwrap();
+            assert_eq!(a, b, "step {k}");
+            let trace = traced.physics_trace().unwrap();
+            let snake = traced.snake().unwrap();
+            assert_eq!(trace.len(), per_step);
+            let first = 2 + k * per_step as u64;
+            assert_eq!(
+                trace.steps,
+                (first..first + per_step as u64).collect::<Vec<_>>()
+            );
+            assert_eq!(*trace.times.last().unwrap(), b.info.time);
+            assert_eq!(trace.poses.len(), per_step * (n + 1) * 7);
+            // The last row is the state the env's snake is in now.
+            let last = &trace.poses[(per_step - 1) * (n + 1) * 7..];
+            for (c, pose) in snake.cube_poses().unwrap().iter().enumerate() {
+                let q = pose.orientation.coords;
+                let p = pose.position;
+                assert_eq!(
+                    &last[7 * c..7 * c + 7],
+                    &[p.x, p.y, p.z, q.x, q.y, q.z, q.w]
+                );
+            }
+            for (j, state) in snake.joint_states().unwrap().iter().enumerate() {
+                let row = (per_step - 1) * n + j;
+                assert_eq!(trace.positions[row], state.position);
+                assert_eq!(trace.velocities[row], state.velocity);
+                assert_eq!(trace.torques[row], state.motor_torque);
+                assert_eq!(b.obs[2 + 2 * j], state.position as f32);
+            }
+            if config.action.mode == ActionMode::Joints {
+                let clipped = action
+                    .iter()
+                    .map(|a| a.clamp(-1.0, 1.0) * config.action_scale);
+                for (row, target) in trace
+                    .targets
+                    .chunks(n)
+                    .flat_map(|r| r.iter().zip(clipped.clone()))
+                {
+                    assert_eq!(*row, target);
+                }
+            } else {
+                assert!(trace.targets.iter().all(|t| t.is_finite()));
+            }
+            // The env's work is the sum over these physics steps of |torque x velocity| dt.
+            work += trace
+                .torques
+                .iter()
+                .zip(&trace.velocities)
+                .map(|(t, v)| (t * v).abs())
+                .sum::<f64>()
+                * config.snake.dt;
+            assert!(
+                (work - b.info.work).abs() <= 1e-12 * work.max(1.0),
+                "{work} {}",
+                b.info.work
+            );
+            if b.terminated || b.truncated {
+                break;
+            }
+        }
+        traced.set_physics_trace(false);
+        assert!(traced.physics_trace().is_none());
+    }
+}

@@ -4,6 +4,8 @@
     snakesim evaluate RUN_OR_MODEL [--episodes 100] [--json out.json]
     snakesim plot RUN [RUN ...] --out fig.png
     snakesim replay RUN_OR_MODEL --out motion.png --out motion.gif
+    snakesim replay RUN_OR_MODEL --rrd episode.rrd          # a Rerun recording (also --spawn, --serve)
+    snakesim view episode.rrd --serve                        # Rerun's web viewer on 127.0.0.1
 
 ``snakesim COMMAND --help`` lists every option. Errors print one line on stderr and exit non-zero
 (2 for bad usage, 1 for anything else, 130 after Ctrl-C).
@@ -314,8 +316,11 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
 # -- replay ---------------------------------------------------------------------------------------
 def cmd_replay(args: argparse.Namespace) -> int:
-    from snakesim import replay
+    from snakesim import replay, rerun_cli
 
+    if not args.out and not rerun_cli.wants_rerun(args):
+        raise UserError("give --out (a figure or animation), --rrd, --spawn or --serve")
+    rrd = rerun_cli.check_replay(args)
     outs = [check_writable(out, "--out") for out in args.out]
     kinds = [replay.check_output(out) for out in outs]
     if len({out.resolve() for out in outs}) < len(outs):
@@ -323,11 +328,19 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if any(kind != "figure" for kind in kinds):
         replay.check_fps(args.fps)
     agent = _load_agent(args)
-    rec = replay.record(
-        lambda obs: agent.act(obs, args.deterministic), agent.env_kwargs, seconds=args.seconds, seed=args.seed
-    )
-    outcome = "reached the goal" if rec.terminated else "did not reach the goal"
-    print(f"replayed {rec.duration:.2f} s ({len(rec.times) - 1} steps): {outcome}, return {rec.ret:.1f}")
+    # Rerun outputs record their episodes first; figures and animations then show the first of them.
+    recorded = rerun_cli.replay(args, agent, rrd) if rerun_cli.wants_rerun(args) else None
+    if recorded is not None:
+        rec = recorded.episodes[0]
+    else:
+        rec = replay.record(
+            lambda obs: agent.act(obs, args.deterministic),
+            agent.env_kwargs,
+            seconds=args.seconds,
+            seed=args.seed,
+        )
+        outcome = "reached the goal" if rec.terminated else "did not reach the goal"
+        print(f"replayed {rec.duration:.2f} s ({len(rec.times) - 1} steps): {outcome}, return {rec.ret:.1f}")
     title = args.title if args.title is not None else f"PPO-{agent.arch}, {agent.joints} joints"
     for out, kind in zip(outs, kinds):
         if kind == "figure":
@@ -337,7 +350,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
             writer = replay.write_gif if kind == "gif" else replay.write_mp4
             frames = write_atomically(out, lambda tmp, writer=writer: writer(rec, tmp, fps=args.fps))
             print(f"wrote {out} ({frames} frames at {args.fps:g} fps)")
-    return 0
+    return recorded.serve() if recorded is not None else 0
 
 
 # -- export ---------------------------------------------------------------------------------------
@@ -381,6 +394,8 @@ def _agent_options(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from snakesim import rerun_cli
+
     parser = _Parser(
         prog="snakesim",
         description="Train, evaluate, plot and replay PPO agents of the 'Simulating Snakes' snake.",
@@ -532,14 +547,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_plot)
 
-    p = sub.add_parser("replay", help="the snake at successive moments (Figure 4) and animations")
+    p = sub.add_parser(
+        "replay", help="the snake at successive moments (Figure 4), animations and Rerun recordings"
+    )
     _agent_options(p)
     p.add_argument(
         "--out",
         action="append",
-        required=True,
+        default=[],
         help="a .png/.pdf/.svg figure, .gif or .mp4 animation (repeatable)",
     )
+    rerun_cli.add_replay_options(p)
     p.add_argument(
         "--seconds", type=_seconds, help="stop after this many simulated seconds (default: the whole episode)"
     )
@@ -566,6 +584,7 @@ def build_parser() -> argparse.ArgumentParser:
     _agent_options(p)
     p.add_argument("--sb3", required=True, metavar="MODEL.zip", help="the zip to write")
     p.set_defaults(func=cmd_export)
+    rerun_cli.add_commands(sub)
     return parser
 
 
@@ -575,6 +594,7 @@ def main(argv: list[str] | None = None) -> int:
     from snakesim.agents import AgentError
     from snakesim.plots import PlotError
     from snakesim.replay import ReplayError
+    from snakesim.rerun_log import RecordingError
     from snakesim.train import RunDirError, TrainingFailed
 
     try:
@@ -586,6 +606,7 @@ def main(argv: list[str] | None = None) -> int:
         RunDirError,
         PlotError,
         ReplayError,
+        RecordingError,
         TrainingFailed,
     ) as error:
         print(f"snakesim {args.command}: error: {_one_line(error)}", file=sys.stderr)

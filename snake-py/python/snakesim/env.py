@@ -166,6 +166,21 @@ class SnakeEnv(gymnasium.Env):
         x, y, z, w), the head (base) first, as a fresh array. Raises RuntimeError before the first reset."""
         return np.asarray(self._env.cube_poses(), dtype=np.float64)
 
+    def set_physics_trace(self, on: bool) -> None:
+        """Turns the physics trace on or off (off by default): while on, every reset and step records
+        the full state after each of its physics steps, read with :meth:`physics_trace`. Observations
+        and rewards are the same bits either way."""
+        self._env.set_physics_trace(bool(on))
+
+    def physics_trace(self) -> dict[str, np.ndarray] | None:
+        """The state after each physics step of the latest reset or step, K rows (K = 1 after a reset,
+        ``physics_steps_per_env_step`` after a step): ``steps`` (K,) the world's physics-step numbers
+        (the reset's own step is 1), ``times`` (K,) seconds, ``poses`` (K, N + 1, 7) every cube's pose
+        as :meth:`cube_poses`, ``positions``, ``velocities``, ``torques`` (the motors' applied torques,
+        N m) and ``targets`` (K, N; NaN on the reset's step, which has none). None while the trace is
+        off. Used by :class:`snakesim.wrappers.RerunLogger`."""
+        return self._env.physics_trace()
+
     @property
     def goal(self) -> tuple[float, float]:
         """The current episode's goal (x, y): ``goal``, or the one passed in ``reset(options=...)``."""

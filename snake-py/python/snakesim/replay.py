@@ -60,15 +60,20 @@ def record(
     *,
     seconds: float | None = None,
     seed: int = 0,
+    env: Any = None,
 ) -> Recording:
-    """Runs one episode of ``act(obs_batch) -> actions`` in a SnakeEnv; stops early after ``seconds``."""
+    """Runs one episode of ``act(obs_batch) -> actions`` in a SnakeEnv; stops early after ``seconds``.
+    ``env``: an env made from ``env_kwargs`` to run instead of a new one (possibly wrapped, e.g. in
+    :class:`snakesim.wrappers.RerunLogger`)."""
     from snakesim.env import make_env
 
-    env = make_env(**env_kwargs)
-    config = env.config
+    if env is None:
+        env = make_env(**env_kwargs)
+    base = env.unwrapped
+    config = base.config
     step_seconds = config["snake"]["dt"] * config["physics_steps_per_env_step"]
     obs, _ = env.reset(seed=seed)
-    poses = [env.cube_poses()]
+    poses = [base.cube_poses()]
     ret, terminated, steps = 0.0, False, 0
     limit = math.inf if seconds is None else seconds
     while steps * step_seconds < limit - 1e-9:
@@ -76,15 +81,15 @@ def record(
         obs, reward, terminated, truncated, _ = env.step(action)
         steps += 1
         ret += float(reward)
-        poses.append(env.cube_poses())
+        poses.append(base.cube_poses())
         if terminated or truncated:
             break
     return Recording(
         times=np.arange(len(poses)) * step_seconds,
         poses=np.stack(poses),
-        goal=env.goal,
+        goal=base.goal,
         goal_radius=float(config["goal_radius"]),
-        half_extent=env.half_extent,
+        half_extent=base.half_extent,
         terminated=bool(terminated),
         ret=ret,
     )

@@ -1,0 +1,669 @@
+"""Rerun recordings of the snake: its cubes in 3D at every physics step, the ground, the goal and the
+head's path, time series of the joints and the reward, and the configuration as text.
+
+What a recording holds (entity paths; ``N`` joints, ``N + 1`` cubes, the head first):
+
+- ``world/snake``: the cubes as 3D boxes (``Boxes3D``), their true poses after every 1/240 s physics
+  step; ``world/ground`` the plane (a thin plate); ``world/head_path`` the head's path so far (sampled
+  every 0.05 s); ``world/goal`` the goal as a flat disc of the goal radius (env episodes only).
+- ``joints/angle``, ``joints/target``, ``joints/velocity``, ``joints/torque``: ``Scalars`` with one
+  value per joint (series ``j0`` ... ``j{N-1}``, joint 0 next to the head) at every physics step:
+  angle and target (rad), velocity (rad/s), the torque the motor applied (N m).
+- Env episodes, at every env step: ``reward/total`` and each term ``reward/goal``,
+  ``reward/progress``, ``reward/smoothness``, ``reward/energy``; ``distance_to_goal`` (m, as the
+  reward computes it); ``episode`` a text log line at each episode's start.
+- ``config``: the run's or env's configuration (``TextDocument``, JSON).
+
+Timelines: ``time`` (simulated time, a duration) and ``step`` (physics steps). An env episode's first
+row is the reset's own physics step (step 1, as the env counts it). Several episodes in one recording
+follow one another on the timelines: the second starts the physics step after the first ends.
+
+Rerun stores positions and quaternions as float32 and scalars as float64.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snakesim.config import LIMITS
+
+#: Timelines of every recording.
+TIME = "time"
+STEP = "step"
+#: Most simulated seconds in one recording (all its episodes together).
+MAX_SECONDS: float = float(LIMITS["recording_seconds"])
+#: The head's path is sampled this often (simulated seconds).
+PATH_PERIOD = 0.05
+#: Half the side of the ground plate, metres (the plane itself is infinite).
+GROUND_HALF = 30.0
+
+HEAD_COLOR = (214, 32, 32, 255)
+BODY_COLOR = (201, 204, 214, 255)
+GROUND_COLOR = (176, 180, 170, 255)
+GOAL_COLOR = (46, 158, 74, 140)
+PATH_COLOR = (90, 120, 220, 255)
+REWARD_TERMS = ("goal", "progress", "smoothness", "energy")
+JOINT_QUANTITIES = ("angle", "target", "velocity", "torque")
+TRACE_FORMAT = "snakesim physics trace 1"
+
+
+class RecordingError(ValueError):
+    """A recording that cannot be made (no viewer, a port in use, too long, ...): one line."""
+
+
+def _rerun():
+    try:
+        import rerun
+    except ImportError as error:  # pragma: no cover - rerun-sdk is in requirements.lock
+        raise RecordingError(
+            f"Rerun recordings need the rerun-sdk package ({error}); install requirements.lock "
+            "(bash scripts/setup)"
+        ) from None
+    return rerun
+
+
+@dataclasses.dataclass
+class Trace:
+    """Consecutive physics steps: K rows of the state after each."""
+
+    steps: np.ndarray  # (K,) physics steps since the world was built
+    poses: np.ndarray  # (K, N + 1, 7): x, y, z, qx, qy, qz, qw of every cube, the head first
+    positions: np.ndarray  # (K, N) joint angles, rad
+    velocities: np.ndarray  # (K, N) rad/s
+    torques: np.ndarray  # (K, N) N m
+    targets: np.ndarray  # (K, N) rad; NaN where no target was set
+
+    @classmethod
+    def from_core(cls, trace: Mapping[str, np.ndarray]) -> Trace:
+        """From ``_core.Env.physics_trace()``."""
+        return cls(
+            steps=np.asarray(trace["steps"], dtype=np.int64),
+            poses=np.asarray(trace["poses"], dtype=np.float64),
+            positions=np.asarray(trace["positions"], dtype=np.float64),
+            velocities=np.asarray(trace["velocities"], dtype=np.float64),
+            torques=np.asarray(trace["torques"], dtype=np.float64),
+            targets=np.asarray(trace["targets"], dtype=np.float64),
+        )
+
+    def __len__(self) -> int:
+        return len(self.steps)
+
+
+def _durations(seconds: np.ndarray) -> np.ndarray:
+    """Seconds as nanosecond durations, rounded to the nearest (Rerun's duration timelines)."""
+    return np.rint(np.asarray(seconds, dtype=np.float64) * 1e9).astype(np.int64).astype("timedelta64[ns]")
+
+
+def blueprint(joints: int, *, rewards: bool):
+    """The viewer's layout: the snake in 3D beside plots of the joints (and the reward), the config."""
+    import rerun as rr
+    import rerun.blueprint as rrb
+
+    # The joints' plots show the 3 s before the time cursor (scroll out for the whole run).
+    window = rrb.TimeAxis(
+        view_range=rr.TimeRange(
+            start=rr.TimeRangeBoundary.cursor_relative(seconds=-3.0),
+            end=rr.TimeRangeBoundary.cursor_relative(seconds=0.0),
+        )
+    )
+    plots = [
+        rrb.TimeSeriesView(
+            name="joint angles and targets (rad)", contents=["joints/angle", "joints/target"], axis_x=window
+        ),
+        rrb.TimeSeriesView(name="motor torques (N m)", origin="joints/torque", axis_x=window),
+        rrb.TimeSeriesView(name="joint velocities (rad/s)", origin="joints/velocity", axis_x=window),
+    ]
+    if rewards:
+        plots.append(
+            rrb.TimeSeriesView(
+                name="reward terms and distance to goal", contents=["reward/**", "distance_to_goal"]
+            )
+        )
+    side = [rrb.TextDocumentView(origin="config", name="configuration")]
+    if rewards:
+        side.append(rrb.TextLogView(origin="episode", name="episodes"))
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(
+                rrb.Spatial3DView(
+                    origin="world",
+                    name="snake",
+                    line_grid=rrb.LineGrid3D(visible=True, spacing=1.0),
+                    # Behind and above the start, following the snake.
+                    eye_controls=rrb.EyeControls3D(
+                        position=[4.0, 5.0, 3.0], look_target=[0.0, 0.0, 0.0], tracking_entity="world/snake"
+                    ),
+                ),
+                rrb.Tabs(*side),
+                row_shares=[3, 1],
+            ),
+            rrb.Vertical(*plots),
+            column_shares=[3, 2],
+        ),
+        rrb.TimePanel(timeline=TIME),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+    )
+
+
+class SnakeLog:
+    """Logs one snake's physics steps (and env steps) to a Rerun recording stream.
+
+    ``config`` is shown as text; ``rewards`` adds the reward and distance plots (env episodes). Episodes
+    follow one another: :meth:`start_episode` begins one after everything logged so far. Rows are
+    buffered and sent in columns every ``flush_rows`` physics steps and by :meth:`flush`.
+    """
+
+    def __init__(
+        self,
+        recording,
+        *,
+        joints: int,
+        dt: float,
+        half_extent: float,
+        config: Mapping[str, Any],
+        rewards: bool,
+        max_seconds: float = MAX_SECONDS,
+        flush_rows: int = 2400,
+    ) -> None:
+        rr = _rerun()
+        self.rr = rr
+        self.rec = recording
+        self.joints = int(joints)
+        self.dt = float(dt)
+        self.half_extent = float(half_extent)
+        self.rewards = rewards
+        self.max_steps = int(math.floor(max_seconds / self.dt + 1e-9))
+        self.flush_rows = flush_rows
+        self.path_every = max(1, round(PATH_PERIOD / self.dt))
+        self.offset = 0  # global step of the previous episode's last physics step
+        self.last_step = 0  # global step of the latest row
+        self.episodes = 0
+        self._path: list[np.ndarray] = []
+        self._path_rows: list[tuple[int, np.ndarray]] = []
+        self._rows: list[Trace] = []
+        self._env_rows: list[tuple[int, dict[str, float], float]] = []
+        # Only our two timelines (no wall-clock log_time / log_tick).
+        rr.set_log_time_enabled(False, recording=recording)
+        rr.set_log_tick_enabled(False, recording=recording)
+        log = self._log_static
+        log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP)
+        log(
+            "world/ground",
+            rr.Boxes3D(
+                # Its top 5 mm under the plane (z = 0), so that the view's grid shows on it.
+                half_sizes=[[GROUND_HALF, GROUND_HALF, 0.005]],
+                centers=[[0.0, 0.0, -0.01]],
+                colors=[GROUND_COLOR],
+                fill_mode="solid",
+            ),
+        )
+        cubes = self.joints + 1
+        log(
+            "world/snake",
+            rr.Boxes3D(
+                half_sizes=np.full((cubes, 3), self.half_extent),
+                colors=[HEAD_COLOR] + [BODY_COLOR] * (cubes - 1),
+                fill_mode="solid",
+            ),
+        )
+        names = [f"j{j}" for j in range(self.joints)]
+        for quantity in JOINT_QUANTITIES:
+            widths = [1.0 if quantity == "target" else 1.5] * self.joints
+            log(f"joints/{quantity}", rr.SeriesLines(names=[f"{n} {quantity}" for n in names], widths=widths))
+        if rewards:
+            for term in ("total", *REWARD_TERMS):
+                log(f"reward/{term}", rr.SeriesLines(names=[f"reward {term}"]))
+            log("distance_to_goal", rr.SeriesLines(names=["distance to goal (m)"]))
+        text = "```json\n" + json.dumps(config, indent=2, default=str) + "\n```\n"
+        log("config", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN))
+        recording.send_blueprint(blueprint(self.joints, rewards=rewards))
+
+    def _log_static(self, path: str, value) -> None:
+        self.rec.log(path, value, static=True)
+
+    def _at(self, step: int) -> None:
+        self.rec.set_time(STEP, sequence=int(step))
+        self.rec.set_time(TIME, duration=np.timedelta64(int(round(step * self.dt * 1e9)), "ns"))
+
+    @property
+    def seconds(self) -> float:
+        """Simulated seconds logged so far."""
+        return self.last_step * self.dt
+
+    def start_episode(
+        self,
+        *,
+        goal: Sequence[float] | None = None,
+        goal_radius: float | None = None,
+        note: str | None = None,
+    ) -> None:
+        """Begins an episode after everything logged so far (its world's steps count from 1)."""
+        self.flush()
+        rr = self.rr
+        self.offset = self.last_step
+        self.episodes += 1
+        self._path = []
+        self._at(self.offset + 1)
+        if goal is not None:
+            radius = float(goal_radius or 0.0)
+            self.rec.log(
+                "world/goal",
+                rr.Cylinders3D(
+                    lengths=[0.02],
+                    radii=[max(radius, 0.05)],
+                    centers=[[float(goal[0]), float(goal[1]), 0.01]],
+                    colors=[GOAL_COLOR],
+                    fill_mode="solid",
+                    labels=[f"goal ({float(goal[0]):.2f}, {float(goal[1]):.2f}), radius {radius:g} m"],
+                ),
+            )
+        if note is not None:
+            self.rec.log("episode", rr.TextLog(note))
+
+    def add_physics(self, trace: Trace) -> None:
+        """Appends physics steps of the current episode (its world's step numbers)."""
+        if len(trace) == 0:
+            return
+        last = self.offset + int(trace.steps[-1])
+        if last > self.max_steps:
+            raise RecordingError(
+                f"the recording is full: it holds at most {self.max_steps * self.dt:g} simulated seconds "
+                f"(LIMITS['recording_seconds'] is {MAX_SECONDS:g})"
+            )
+        n = self.joints
+        if trace.poses.shape[1:] != (n + 1, 7) or trace.positions.shape[1:] != (n,):
+            raise RecordingError(
+                f"expected the state of {n} joints, got poses {trace.poses.shape} and angles "
+                f"{trace.positions.shape}"
+            )
+        self._rows.append(trace)
+        for k in range(len(trace)):
+            local = int(trace.steps[k])
+            if local == 1 or local % self.path_every == 0:
+                self._path.append(trace.poses[k, 0, :3].copy())
+                self._path_rows.append((self.offset + local, np.array(self._path)))
+        self.last_step = last
+        if sum(len(t) for t in self._rows) >= self.flush_rows:
+            self.flush()
+
+    def add_env_step(self, step: int, reward: float, info: Mapping[str, Any]) -> None:
+        """One env step's reward terms and distance, at its last physics step (the world's number)."""
+        values = {"total": float(reward)}
+        for term in REWARD_TERMS:
+            values[term] = float(info.get(f"reward_{term}", 0.0))
+        self._env_rows.append((self.offset + int(step), values, float(info.get("distance", math.nan))))
+
+    def flush(self) -> None:
+        """Sends every buffered row."""
+        rr = self.rr
+        if self._rows:
+            rows = self._rows
+            self._rows = []
+            steps = self.offset + np.concatenate([t.steps for t in rows])
+            index = [
+                rr.TimeColumn(STEP, sequence=steps),
+                rr.TimeColumn(TIME, duration=_durations(steps * self.dt)),
+            ]
+            poses = np.concatenate([t.poses for t in rows])
+            k, cubes = poses.shape[:2]
+            self.rec.send_columns(
+                "world/snake",
+                indexes=index,
+                columns=rr.Boxes3D.columns(
+                    centers=poses[:, :, :3].reshape(-1, 3),
+                    quaternions=poses[:, :, 3:7].reshape(-1, 4),
+                ).partition([cubes] * k),
+            )
+            for quantity, name in zip(JOINT_QUANTITIES, ("positions", "targets", "velocities", "torques")):
+                values = np.concatenate([getattr(t, name) for t in rows])
+                keep = ~np.isnan(values).any(axis=1)  # a reset's step has no target
+                if not keep.any():
+                    continue
+                self.rec.send_columns(
+                    f"joints/{quantity}",
+                    indexes=[
+                        rr.TimeColumn(STEP, sequence=steps[keep]),
+                        rr.TimeColumn(TIME, duration=_durations(steps[keep] * self.dt)),
+                    ],
+                    columns=rr.Scalars.columns(scalars=values[keep]),
+                )
+        for step, path in self._path_rows:
+            self._at(step)
+            self.rec.log("world/head_path", rr.LineStrips3D([path], colors=[PATH_COLOR], radii=[0.03]))
+        self._path_rows.clear()
+        if self._env_rows:
+            rows = self._env_rows
+            self._env_rows = []
+            steps = np.array([r[0] for r in rows], dtype=np.int64)
+            index = [
+                rr.TimeColumn(STEP, sequence=steps),
+                rr.TimeColumn(TIME, duration=_durations(steps * self.dt)),
+            ]
+            for term in ("total", *REWARD_TERMS):
+                self.rec.send_columns(
+                    f"reward/{term}",
+                    indexes=index,
+                    columns=rr.Scalars.columns(scalars=np.array([r[1][term] for r in rows])),
+                )
+            self.rec.send_columns(
+                "distance_to_goal",
+                indexes=index,
+                columns=rr.Scalars.columns(scalars=np.array([r[2] for r in rows])),
+            )
+
+
+# -- physics traces from snake-cli ----------------------------------------------------------------
+def trace_columns(joints: int) -> list[str]:
+    """The columns of a physics-trace CSV (``snake-cli run --trace``)."""
+    columns = ["step", "t"]
+    for c in range(joints + 1):
+        columns += [f"c{c}_{k}" for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]
+    for prefix in ("q", "qd", "tau", "target"):
+        columns += [f"{prefix}{j}" for j in range(joints)]
+    return columns
+
+
+def read_trace_header(path: str | os.PathLike) -> tuple[dict[str, Any], list[str]]:
+    """The metadata line and the column names of a physics-trace CSV; RecordingError if it is not one."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            first = f.readline()
+            header = f.readline().strip().split(",")
+    except OSError as error:
+        raise RecordingError(f"cannot read {path}: {error.strerror or error}") from None
+    except UnicodeDecodeError:
+        raise RecordingError(f"{path} is not a physics trace (not text)") from None
+    prefix = f"# {TRACE_FORMAT} "
+    if not first.startswith(prefix):
+        raise RecordingError(
+            f"{path} is not a physics trace (its first line must start with {prefix.strip()!r})"
+        )
+    try:
+        meta = json.loads(first[len(prefix) :])
+        joints = int(meta["joints"])
+        dt = float(meta["dt"])
+    except (ValueError, KeyError, TypeError) as error:
+        raise RecordingError(f"{path}: malformed physics-trace metadata ({error})") from None
+    if not (1 <= joints <= LIMITS["joints"] and math.isfinite(dt) and dt > 0):
+        raise RecordingError(f"{path}: joints {joints} or dt {dt} out of range")
+    if header != trace_columns(joints):
+        raise RecordingError(f"{path}: the column header does not match a {joints}-joint physics trace")
+    return meta, header
+
+
+def read_trace(path: str | os.PathLike, rows: int = 2400) -> tuple[dict[str, Any], Iterator[Trace]]:
+    """A physics-trace CSV's metadata and its rows in blocks of ``rows`` (memory stays bounded)."""
+    meta, header = read_trace_header(path)
+    n = int(meta["joints"])
+
+    def blocks() -> Iterator[Trace]:
+        with open(path, encoding="utf-8") as f:
+            f.readline()
+            f.readline()
+            line = 2
+            while True:
+                try:
+                    data = np.loadtxt(f, delimiter=",", max_rows=rows, ndmin=2)
+                except ValueError as error:
+                    raise RecordingError(f"{path}: malformed row after line {line}: {error}") from None
+                if data.size == 0:
+                    return
+                if data.shape[1] != len(header):
+                    raise RecordingError(
+                        f"{path}: rows after line {line} have {data.shape[1]} values, expected {len(header)}"
+                    )
+                line += len(data)
+                c = 2 + 7 * (n + 1)
+                yield Trace(
+                    steps=data[:, 0].astype(np.int64),
+                    poses=data[:, 2:c].reshape(-1, n + 1, 7),
+                    positions=data[:, c : c + n],
+                    velocities=data[:, c + n : c + 2 * n],
+                    torques=data[:, c + 2 * n : c + 3 * n],
+                    targets=data[:, c + 3 * n : c + 4 * n],
+                )
+                if len(data) < rows:
+                    return
+
+    return meta, blocks()
+
+
+def log_trace(recording, path: str | os.PathLike) -> int:
+    """Logs a physics-trace CSV as one episode; returns the number of physics steps."""
+    meta, blocks = read_trace(path)
+    log = SnakeLog(
+        recording,
+        joints=int(meta["joints"]),
+        dt=float(meta["dt"]),
+        half_extent=float(meta.get("half_extent", 0.25)),
+        config=meta,
+        rewards=False,
+    )
+    log.start_episode()
+    count = 0
+    for block in blocks:
+        log.add_physics(block)
+        count += len(block)
+    log.flush()
+    if count == 0:
+        raise RecordingError(f"{path} holds no physics steps")
+    return count
+
+
+# -- where a recording goes -------------------------------------------------------------------------
+def rerun_executable() -> str:
+    """The Rerun viewer program shipped with rerun-sdk."""
+    try:
+        import rerun_cli
+    except ImportError:  # pragma: no cover
+        raise RecordingError("the Rerun viewer (rerun-sdk's rerun_cli) is not installed") from None
+    exe = Path(rerun_cli.__file__).with_name("rerun")
+    if not exe.is_file():  # pragma: no cover
+        raise RecordingError(f"the Rerun viewer is missing: {exe} does not exist")
+    return str(exe)
+
+
+def check_port_free(port: int, flag: str) -> None:
+    """RecordingError unless ``port`` can be listened on at 127.0.0.1."""
+    if not 1 <= port <= 65535:
+        raise RecordingError(f"{flag} must be a port in [1, 65535], got {port}")
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind(("127.0.0.1", port))
+        except OSError as error:
+            raise RecordingError(
+                f"{flag}: port {port} on 127.0.0.1 is in use ({error.strerror or error}); pick another port"
+            ) from None
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def check_display() -> None:
+    """RecordingError where the native viewer cannot open a window (Linux without a display)."""
+    if sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    ):
+        raise RecordingError(
+            "--spawn opens Rerun's native viewer, which needs a display (DISPLAY and WAYLAND_DISPLAY are "
+            "unset); watch in a browser with --serve, or write a file with --rrd"
+        )
+
+
+def _last_line(path: Path) -> str:
+    try:
+        lines = [line.strip() for line in path.read_text(errors="replace").splitlines() if line.strip()]
+    except OSError:
+        return ""
+    return lines[-1] if lines else ""
+
+
+def _wait_for_port(process: subprocess.Popen, port: int, log: Path, what: str, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if process.poll() is not None:
+            raise RecordingError(
+                f"{what} exited with status {process.returncode} before it was ready: "
+                f"{_last_line(log) or 'no message'}"
+            )
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            s.settimeout(0.5)
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.1)
+    process.terminate()
+    raise RecordingError(f"{what} did not start listening on 127.0.0.1:{port} within {timeout:g} s")
+
+
+def spawn_viewer() -> str:
+    """Starts Rerun's native viewer (detached: it stays open after we exit); returns the gRPC URL
+    to stream to. RecordingError if it cannot open (no display, a viewer that fails)."""
+    check_display()
+    port = _free_port()
+    log = Path(tempfile.gettempdir()) / f"snakesim-rerun-viewer-{os.getpid()}.log"
+    with open(log, "wb") as out:
+        process = subprocess.Popen(
+            [rerun_executable(), "--port", str(port), "--expect-data-soon"],
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
+    _wait_for_port(process, port, log, "the Rerun viewer")
+    return f"rerun+http://127.0.0.1:{port}/proxy"
+
+
+def spawn_file(path: str | os.PathLike) -> None:
+    """Opens the recording ``path`` in Rerun's native viewer (detached)."""
+    check_display()
+    port = _free_port()
+    log = Path(tempfile.gettempdir()) / f"snakesim-rerun-viewer-{os.getpid()}.log"
+    with open(log, "wb") as out:
+        process = subprocess.Popen(
+            [rerun_executable(), "--port", str(port), os.fspath(path)],
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
+    _wait_for_port(process, port, log, "the Rerun viewer")
+
+
+def serve(path: str | os.PathLike, *, web_port: int, grpc_port: int, ready=None) -> int:
+    """Serves the recording ``path`` with Rerun's web viewer on 127.0.0.1 until Ctrl-C (or the server
+    ends); ``ready(url)`` is called once the page can be opened. Returns 0 after Ctrl-C."""
+    check_port_free(web_port, "--web-port")
+    check_port_free(grpc_port, "--grpc-port")
+    if web_port == grpc_port:
+        raise RecordingError("--web-port and --grpc-port must differ")
+    with tempfile.TemporaryDirectory(prefix="snakesim-serve-") as tmp:
+        log = Path(tmp) / "rerun.log"
+        with open(log, "wb") as out:
+            process = subprocess.Popen(
+                [
+                    rerun_executable(),
+                    "--serve-web",
+                    "--bind",
+                    "127.0.0.1",
+                    "--port",
+                    str(grpc_port),
+                    "--web-viewer-port",
+                    str(web_port),
+                    os.fspath(path),
+                ],
+                stdin=subprocess.DEVNULL,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,  # Ctrl-C reaches us; we stop it
+            )
+        try:
+            _wait_for_port(process, web_port, log, "the Rerun web server")
+            _wait_for_port(process, grpc_port, log, "the Rerun web server")
+            url = web_viewer_url(web_port, grpc_port)
+            if ready is not None:
+                ready(url)
+            process.wait()
+            raise RecordingError(
+                f"the Rerun web server stopped (status {process.returncode}): "
+                f"{_last_line(log) or 'no message'}"
+            )
+        except KeyboardInterrupt:
+            return 0
+        finally:
+            if process.poll() is None:
+                process.send_signal(signal.SIGTERM)
+                try:
+                    process.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+                    process.wait()
+
+
+def web_viewer_url(web_port: int, grpc_port: int) -> str:
+    """The page of the web viewer served on ``web_port`` showing the recording on ``grpc_port``."""
+    from urllib.parse import quote
+
+    return f"http://127.0.0.1:{web_port}/?url=" + quote(f"rerun+http://127.0.0.1:{grpc_port}/proxy", safe="")
+
+
+@contextmanager
+def recording_to(
+    *,
+    rrd: str | os.PathLike | None = None,
+    spawn_url: str | None = None,
+    application_id: str = "snakesim",
+    name: str | None = None,
+):
+    """A new recording stream whose data goes to the file ``rrd`` (written whole: a temporary file
+    renamed into place when the block ends without error) and/or a viewer at ``spawn_url``."""
+    rr = _rerun()
+    rec = rr.RecordingStream(application_id)
+    sinks = []
+    tmp = None
+    if rrd is not None:
+        target = Path(rrd)
+        fd, tmp_name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".rrd")
+        os.close(fd)
+        tmp = Path(tmp_name)
+        sinks.append(rr.FileSink(tmp_name))
+    if spawn_url is not None:
+        sinks.append(rr.GrpcSink(spawn_url))
+    try:
+        if sinks:
+            rec.set_sinks(*sinks)
+        if name:
+            rec.send_recording_name(name)
+        yield rec
+        rec.flush()
+        rec.disconnect()
+        if tmp is not None:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
+            os.replace(tmp, Path(rrd))
+            tmp = None
+    finally:
+        if tmp is not None:
+            try:
+                rec.disconnect()
+            finally:
+                tmp.unlink(missing_ok=True)
