@@ -99,7 +99,7 @@ def gait_run(snake_cli, tmp_path_factory) -> Path:
 def test_gait_recording_holds_every_physics_step_of_the_csv(gait_run):
     rows = _csv_rows(gait_run / "traj.csv")
     entities = read_rrd(gait_run / "gait.rrd")
-    assert {"/world", "/world/ground", "/world/snake", "/world/head_path", "/config"} <= set(entities)
+    assert {"/world", "/world/ground", "/world/snake", "/world/head_path/0", "/config"} <= set(entities)
     assert {f"/joints/{q}" for q in ("angle", "target", "velocity", "torque")} <= set(entities)
     assert "/world/goal" not in entities  # a gait run has no goal
 
@@ -134,11 +134,12 @@ def test_gait_recording_holds_every_physics_step_of_the_csv(gait_run):
         assert np.array_equal(values, getattr(trace, field)), name
     torques = np.array(_column(entities["/joints/torque"]["rows"], "scalars"))
     assert np.abs(torques).max() <= 10.0 and np.abs(torques).max() > 0.1  # the motor force limit
-    # The head's path: sampled every 0.05 s, ending at the head.
-    path = entities["/world/head_path"]["rows"]
+    # The head's path: sampled every 0.05 s (41 points: one piece), ending at the head.
+    path = entities["/world/head_path/0"]["rows"]
     assert [row["step"] for row in path] == [1] + list(range(12, 481, 12))
     last = np.array(_column(path, "strips")[-1][0])
-    assert np.array_equal(last[-1], base[-1].astype(np.float32))
+    assert len(last) == 41 and np.array_equal(last[-1], base[-1].astype(np.float32))
+    assert np.array_equal(last, base[[0] + list(range(11, 480, 12))].astype(np.float32))
     # The configuration as text.
     (text,) = _column([entities["/config"]["static"]], "text")[0]
     config = json.loads(text.split("```json\n")[1].split("```")[0])
@@ -229,6 +230,36 @@ def test_the_wrapper_changes_nothing_and_stops_at_its_limit(tmp_path):
             RerunLogger(gymnasium.make("snakesim/Snake-v0"))
 
 
+def test_long_head_paths_are_logged_in_pieces(tmp_path):
+    from snakesim.rerun_log import PATH_PIECE, SnakeLog, Trace
+
+    recording = rr.RecordingStream("snakesim-test")
+    recording.save(tmp_path / "path.rrd")
+    log = SnakeLog(recording, joints=1, dt=DT, half_extent=0.25, config={}, rewards=False, flush_rows=1000)
+    k = 2 * 240 * 5 + 24  # 10.1 s: 203 samples
+    steps = np.arange(1, k + 1)
+    head = np.stack([np.cos(steps / 100), np.sin(steps / 100), np.full(k, 0.25)], axis=1)
+    poses = np.zeros((k, 2, 7))
+    poses[:, 0, :3] = head
+    poses[:, :, 6] = 1
+    joint = np.zeros((k, 1))
+    for _ in range(2):
+        log.start_episode()
+        log.add_physics(Trace(steps, poses, joint, joint, joint, joint))
+    log.flush()
+    recording.disconnect()
+    entities = read_rrd(tmp_path / "path.rrd")
+    sampled = np.array([0] + list(range(11, k, 12)))
+    assert len(sampled) == 203 > 2 * PATH_PIECE
+    pieces = [np.array(_column(entities[f"/world/head_path/{i}"]["rows"], "strips")[-1][0]) for i in range(3)]
+    assert [len(p) for p in pieces] == [100, 100, 5]  # each piece starts where the last one ended
+    joined = np.concatenate([pieces[0], pieces[1][1:], pieces[2][1:]])
+    assert np.array_equal(joined, head[sampled].astype(np.float32))
+    # The second episode starts by clearing the first one's path, at its first step.
+    assert [row["step"] for row in entities["/world/head_path"]["rows"]] == [k + 1]
+    assert [row["step"] for row in entities["/world/snake"]["rows"]] == list(range(1, 2 * k + 1))
+
+
 # -- the web viewer in a headless browser ---------------------------------------------------------------
 def _free_port() -> int:
     with socket.socket() as s:
@@ -298,7 +329,7 @@ def test_the_web_viewer_shows_the_recording_in_chromium(gait_run, tmp_path):
     finally:
         if browser is not None:
             browser.close()
-        server.send_signal(signal.SIGINT)
+        server.send_signal(signal.SIGTERM)  # as `kill` stops it
         try:
             _, err = server.communicate(timeout=20)
         except subprocess.TimeoutExpired:
@@ -309,6 +340,36 @@ def test_the_web_viewer_shows_the_recording_in_chromium(gait_run, tmp_path):
     # The server is gone with its ports.
     with socket.socket() as s:
         s.bind(("127.0.0.1", web))
+
+
+def test_serve_stops_on_ctrl_c_and_leaves_nothing_behind(gait_run, tmp_path):
+    # Served without --rrd: the recording lives in a temporary file until the server stops.
+    web, grpc = _free_port(), _free_port()
+    env = _env() | {"TMPDIR": str(tmp_path)}
+    server = subprocess.Popen(
+        [sys.executable, "-m", "snakesim", "convert", gait_run / "trace.csv"]
+        + ["--serve", "--web-port", str(web), "--grpc-port", str(grpc)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        assert "recorded 480 physics steps of 4 joints" in server.stdout.readline()
+        assert f"http://127.0.0.1:{web}/?url=" in server.stdout.readline()
+        assert [p.name[:13] for p in tmp_path.iterdir() if p.name.startswith("snakesim-rrd")] == [
+            "snakesim-rrd-"
+        ]
+        with socket.create_connection(("127.0.0.1", web), timeout=5):
+            pass
+    finally:
+        server.send_signal(signal.SIGINT)
+        _, err = server.communicate(timeout=30)
+    assert server.returncode == 0 and err == "", err
+    for port in (web, grpc):
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", port))
+    assert not list(tmp_path.iterdir())  # the served temporary recording is gone
 
 
 def _write_b64(path: Path, data: str) -> Path:
@@ -376,6 +437,16 @@ def test_spawn_without_a_display_is_one_line(gait_run, capsys, monkeypatch):
     line = _one_line(capsys, ["replay", MODEL, "--spawn"])
     assert "needs a display" in line and "--serve" in line
     assert "needs a display" in _one_line(capsys, ["view", gait_run / "gait.rrd", "--spawn"])
+
+
+def test_spawn_with_a_display_that_is_not_there_is_one_line(gait_run, capsys, monkeypatch):
+    # The viewer opens its port, then fails to reach the X server: the command must say so, not
+    # report success.
+    free = next(n for n in range(99, 200) if not Path(f"/tmp/.X11-unix/X{n}").exists())
+    monkeypatch.setenv("DISPLAY", f":{free}")
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    line = _one_line(capsys, ["view", gait_run / "gait.rrd", "--spawn"])
+    assert "the Rerun viewer exited" in line
 
 
 def test_serve_on_a_port_in_use_is_one_line(gait_run, capsys):

@@ -4,8 +4,9 @@ head's path, time series of the joints and the reward, and the configuration as 
 What a recording holds (entity paths; ``N`` joints, ``N + 1`` cubes, the head first):
 
 - ``world/snake``: the cubes as 3D boxes (``Boxes3D``), their true poses after every 1/240 s physics
-  step; ``world/ground`` the plane (a thin plate); ``world/head_path`` the head's path so far (sampled
-  every 0.05 s); ``world/goal`` the goal as a flat disc of the goal radius (env episodes only).
+  step; ``world/ground`` the plane (a thin plate); ``world/head_path/{k}`` the head's path so far
+  (sampled every 0.05 s, in pieces of 100 points); ``world/goal`` the goal as a flat disc of the goal
+  radius (env episodes only).
 - ``joints/angle``, ``joints/target``, ``joints/velocity``, ``joints/torque``: ``Scalars`` with one
   value per joint (series ``j0`` ... ``j{N-1}``, joint 0 next to the head) at every physics step:
   angle and target (rad), velocity (rad/s), the torque the motor applied (N m).
@@ -49,6 +50,9 @@ STEP = "step"
 MAX_SECONDS: float = float(LIMITS["recording_seconds"])
 #: The head's path is sampled this often (simulated seconds).
 PATH_PERIOD = 0.05
+#: Points per piece of the head's path (``world/head_path/0``, ``/1``, ...): each piece is logged
+#: growing until it is full and then stays, so a recording holds O(T) path points, not O(T^2).
+PATH_PIECE = 100
 #: Half the side of the ground plate, metres (the plane itself is infinite).
 GROUND_HALF = 30.0
 
@@ -194,8 +198,9 @@ class SnakeLog:
         self.offset = 0  # global step of the previous episode's last physics step
         self.last_step = 0  # global step of the latest row
         self.episodes = 0
-        self._path: list[np.ndarray] = []
-        self._path_rows: list[tuple[int, np.ndarray]] = []
+        self._path: list[np.ndarray] = []  # the current piece's points
+        self._pieces = 0  # full pieces of this episode's path
+        self._path_rows: list[tuple[int, int, np.ndarray]] = []  # (step, piece, points)
         self._rows: list[Trace] = []
         self._env_rows: list[tuple[int, dict[str, float], float]] = []
         # Only our two timelines (no wall-clock log_time / log_tick).
@@ -259,7 +264,10 @@ class SnakeLog:
         self.offset = self.last_step
         self.episodes += 1
         self._path = []
+        self._pieces = 0
         self._at(self.offset + 1)
+        if self.episodes > 1:
+            self.rec.log("world/head_path", rr.Clear(recursive=True))  # the last episode's path
         if goal is not None:
             radius = float(goal_radius or 0.0)
             self.rec.log(
@@ -296,8 +304,12 @@ class SnakeLog:
         for k in range(len(trace)):
             local = int(trace.steps[k])
             if local == 1 or local % self.path_every == 0:
+                if len(self._path) == PATH_PIECE:
+                    # A new piece starts where the full one ends.
+                    self._path = [self._path[-1]]
+                    self._pieces += 1
                 self._path.append(trace.poses[k, 0, :3].copy())
-                self._path_rows.append((self.offset + local, np.array(self._path)))
+                self._path_rows.append((self.offset + local, self._pieces, np.array(self._path)))
         self.last_step = last
         if sum(len(t) for t in self._rows) >= self.flush_rows:
             self.flush()
@@ -343,9 +355,11 @@ class SnakeLog:
                     ],
                     columns=rr.Scalars.columns(scalars=values[keep]),
                 )
-        for step, path in self._path_rows:
+        for step, piece, path in self._path_rows:
             self._at(step)
-            self.rec.log("world/head_path", rr.LineStrips3D([path], colors=[PATH_COLOR], radii=[0.03]))
+            self.rec.log(
+                f"world/head_path/{piece}", rr.LineStrips3D([path], colors=[PATH_COLOR], radii=[0.03])
+            )
         self._path_rows.clear()
         if self._env_rows:
             rows = self._env_rows
@@ -534,38 +548,48 @@ def _wait_for_port(process: subprocess.Popen, port: int, log: Path, what: str, t
     raise RecordingError(f"{what} did not start listening on 127.0.0.1:{port} within {timeout:g} s")
 
 
-def spawn_viewer() -> str:
-    """Starts Rerun's native viewer (detached: it stays open after we exit); returns the gRPC URL
-    to stream to. RecordingError if it cannot open (no display, a viewer that fails)."""
+#: How long a spawned viewer must stay up after it listens: one without a usable display (an X server
+#: that is not there) opens its port first and exits a moment later.
+SPAWN_GRACE = 2.0
+
+
+def _spawn(extra: list[str]) -> int:
+    """Starts Rerun's native viewer detached (it stays open after we exit), its gRPC server on
+    127.0.0.1; returns that port once it listens and stayed up. RecordingError if it does not."""
     check_display()
     port = _free_port()
-    log = Path(tempfile.gettempdir()) / f"snakesim-rerun-viewer-{os.getpid()}.log"
-    with open(log, "wb") as out:
-        process = subprocess.Popen(
-            [rerun_executable(), "--port", str(port), "--expect-data-soon"],
-            stdin=subprocess.DEVNULL,
-            stdout=out,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
+    fd, name = tempfile.mkstemp(prefix="snakesim-rerun-viewer-", suffix=".log")
+    log = Path(name)
+    try:
+        with os.fdopen(fd, "wb") as out:
+            process = subprocess.Popen(
+                [rerun_executable(), "--bind", "127.0.0.1", "--port", str(port), *extra],
+                stdin=subprocess.DEVNULL,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
+        _wait_for_port(process, port, log, "the Rerun viewer")
+        try:
+            process.wait(timeout=SPAWN_GRACE)
+        except subprocess.TimeoutExpired:
+            return port
+        raise RecordingError(
+            f"the Rerun viewer exited with status {process.returncode}: {_last_line(log) or 'no message'}"
         )
-    _wait_for_port(process, port, log, "the Rerun viewer")
+    finally:
+        log.unlink(missing_ok=True)  # a running viewer keeps writing to it, unnamed
+
+
+def spawn_viewer() -> str:
+    """Starts Rerun's native viewer; returns the gRPC URL to stream a recording to."""
+    port = _spawn(["--expect-data-soon"])
     return f"rerun+http://127.0.0.1:{port}/proxy"
 
 
 def spawn_file(path: str | os.PathLike) -> None:
-    """Opens the recording ``path`` in Rerun's native viewer (detached)."""
-    check_display()
-    port = _free_port()
-    log = Path(tempfile.gettempdir()) / f"snakesim-rerun-viewer-{os.getpid()}.log"
-    with open(log, "wb") as out:
-        process = subprocess.Popen(
-            [rerun_executable(), "--port", str(port), os.fspath(path)],
-            stdin=subprocess.DEVNULL,
-            stdout=out,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-        )
-    _wait_for_port(process, port, log, "the Rerun viewer")
+    """Opens the recording ``path`` in Rerun's native viewer."""
+    _spawn([os.fspath(path)])
 
 
 def serve(path: str | os.PathLike, *, web_port: int, grpc_port: int, ready=None) -> int:
@@ -596,6 +620,13 @@ def serve(path: str | os.PathLike, *, web_port: int, grpc_port: int, ready=None)
                 start_new_session=True,  # Ctrl-C reaches us; we stop it
             )
         try:
+            # A `kill` or a closed terminal stops the server as Ctrl-C does, never leaving it behind.
+            stops = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGHUP)}
+            for sig in stops:
+                signal.signal(sig, _interrupt)
+        except ValueError:  # not the main thread: signals stay as they are
+            stops = {}
+        try:
             _wait_for_port(process, web_port, log, "the Rerun web server")
             _wait_for_port(process, grpc_port, log, "the Rerun web server")
             url = web_viewer_url(web_port, grpc_port)
@@ -609,6 +640,8 @@ def serve(path: str | os.PathLike, *, web_port: int, grpc_port: int, ready=None)
         except KeyboardInterrupt:
             return 0
         finally:
+            for sig, handler in stops.items():
+                signal.signal(sig, handler)
             if process.poll() is None:
                 process.send_signal(signal.SIGTERM)
                 try:
@@ -616,6 +649,10 @@ def serve(path: str | os.PathLike, *, web_port: int, grpc_port: int, ready=None)
                 except subprocess.TimeoutExpired:
                     process.kill()
                     process.wait()
+
+
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
 
 
 def web_viewer_url(web_port: int, grpc_port: int) -> str:
