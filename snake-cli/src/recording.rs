@@ -92,11 +92,11 @@ fn find_on_path(name: &str) -> Option<PathBuf> {
     })
 }
 
-/// Refuses a run longer than a recording holds.
-pub fn check_seconds(seconds: f64) -> Result<()> {
+/// Refuses a run longer than a recording holds (`flag`: --rrd or --trace, whose file it would be).
+pub fn check_seconds(flag: &str, seconds: f64) -> Result<()> {
     let max = snake_core::limits::MAX_RECORDING_SECONDS;
     if seconds > max {
-        bail!("--rrd records at most {max} simulated seconds, got --seconds {seconds}");
+        bail!("{flag} records at most {max} simulated seconds, got --seconds {seconds}");
     }
     Ok(())
 }

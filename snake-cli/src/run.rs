@@ -112,8 +112,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     .filter_map(|(flag, path)| path.as_deref().map(|p| (flag, p)))
     .collect();
     check_distinct(&outputs)?;
-    if args.rrd.is_some() {
-        recording::check_seconds(args.seconds)?;
+    for (flag, path) in [("--rrd", &args.rrd), ("--trace", &args.trace)] {
+        if path.is_some() {
+            recording::check_seconds(flag, args.seconds)?;
+        }
     }
     let rrd_file = args
         .rrd
@@ -247,7 +249,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             converter.convert(&path, rrd.temp_path(), &out)?;
             rrd.commit()?;
             say!(
-                "wrote {} (open it with: .venv/bin/rerun {0})",
+                "wrote {} (open it with: .venv/bin/rerun {0}, or snakesim view {0} --serve)",
                 out.display()
             )?;
         }

@@ -286,6 +286,10 @@ fn bad_input_is_one_clear_line() {
             "--rrd records at most 600",
         ),
         (
+            &["run", "--seconds", "601", "--trace", "x.csv"],
+            "--trace records at most 600",
+        ),
+        (
             &["run", "--output", "same.rrd", "--rrd", "./same.rrd"],
             "--output and --rrd name the same file",
         ),

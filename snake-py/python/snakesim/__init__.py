@@ -12,6 +12,10 @@
 
 - :class:`SnakeVecEnv`, Stable-Baselines3's ``VecEnv`` over the batched Rust env (threads, no
   subprocesses), and :class:`SnakeVectorEnv`, the same for Gymnasium's vector API.
+
+- :class:`snakesim.wrappers.RerunLogger`, a wrapper that logs episodes to Rerun as they run (the cubes
+  in 3D at every physics step, the joints, the reward); :mod:`snakesim.rerun_log` says what a
+  recording holds.
 """
 
 from __future__ import annotations
