@@ -80,7 +80,8 @@ class RerunLogger(gymnasium.Wrapper):
             self.log.start_episode(
                 goal=goal,
                 goal_radius=self._goal_radius,
-                note=f"episode {self.log.episodes + 1}: seed {seed}, start ({start[0]:.2f}, {start[1]:.2f}) "
+                note=f"episode {self.log.episodes + 1}: {'no seed' if seed is None else f'seed {seed}'}, "
+                f"start ({start[0]:.2f}, {start[1]:.2f}) "
                 f"yaw {start[3]:.2f}, goal ({goal[0]:.2f}, {goal[1]:.2f})",
             )
             self._log_trace()
