@@ -25,6 +25,7 @@ Rerun stores positions and quaternions as float32 and scalars as float64.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import math
 import os
@@ -432,17 +433,24 @@ def read_trace(path: str | os.PathLike, rows: int = 2400) -> tuple[dict[str, Any
             f.readline()
             line = 2
             while True:
-                try:
-                    data = np.loadtxt(f, delimiter=",", max_rows=rows, ndmin=2)
-                except ValueError as error:
-                    raise RecordingError(f"{path}: malformed row after line {line}: {error}") from None
-                if data.size == 0:
+                raw = list(itertools.islice(f, rows))
+                if not raw:
                     return
+                lines = [text for text in raw if text.strip()]  # blank lines carry nothing
+                if not lines:
+                    continue
+                try:
+                    data = np.loadtxt(lines, delimiter=",", ndmin=2)
+                except ValueError as error:
+                    raise RecordingError(
+                        f"{path}: malformed rows in lines {line + 1}-{line + len(raw)}: {error}"
+                    ) from None
                 if data.shape[1] != len(header):
                     raise RecordingError(
-                        f"{path}: rows after line {line} have {data.shape[1]} values, expected {len(header)}"
+                        f"{path}: rows in lines {line + 1}-{line + len(raw)} have {data.shape[1]} values, "
+                        f"expected {len(header)}"
                     )
-                line += len(data)
+                line += len(raw)
                 c = 2 + 7 * (n + 1)
                 yield Trace(
                     steps=data[:, 0].astype(np.int64),
@@ -452,7 +460,7 @@ def read_trace(path: str | os.PathLike, rows: int = 2400) -> tuple[dict[str, Any
                     torques=data[:, c + 2 * n : c + 3 * n],
                     targets=data[:, c + 3 * n : c + 4 * n],
                 )
-                if len(data) < rows:
+                if len(raw) < rows:
                     return
 
     return meta, blocks()
