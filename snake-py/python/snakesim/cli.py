@@ -6,6 +6,8 @@
     snakesim replay RUN_OR_MODEL --out motion.png --out motion.gif
     snakesim replay RUN_OR_MODEL --rrd episode.rrd          # a Rerun recording (also --spawn, --serve)
     snakesim view episode.rrd --serve                        # Rerun's web viewer on 127.0.0.1
+    snakesim sweep CONFIG.yaml [...] --seeds K [--grid KEY=V1,V2] --out sweeps/NAME [--address HOST:PORT]
+    snakesim search CONFIG.yaml --space space.yaml --trials T --out sweeps/NAME
 
 ``snakesim COMMAND --help`` lists every option. Errors print one line on stderr and exit non-zero
 (2 for bad usage, 1 for anything else, 130 after Ctrl-C).
@@ -21,7 +23,7 @@ import sys
 from pathlib import Path
 from typing import Any, NoReturn
 
-from snakesim import runconfig
+from snakesim import runconfig, search, sweep
 from snakesim.config import LIMITS, PRESETS
 from snakesim.files import write_atomically
 
@@ -314,6 +316,39 @@ def cmd_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- sweep and search -----------------------------------------------------------------------------
+def _cluster_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a config key for every trial (repeatable)",
+    )
+    p.add_argument(
+        "--address",
+        metavar="HOST:PORT",
+        help="a running Ray cluster (what `ray start --head` prints; default: a local Ray for this command; "
+        "an unreachable one is an error within 30 s)",
+    )
+    p.add_argument(
+        "--cpus-per-trial",
+        dest="cpus_per_trial",
+        type=_threads,
+        help=f"CPUs Ray reserves per trial, also its threads unless the config sets them "
+        f"(default {sweep.DEFAULT_CPUS_PER_TRIAL})",
+    )
+    p.add_argument(
+        "--max-failures",
+        dest="max_failures",
+        type=_int_at_least(0, sweep.MAX_FAILURES),
+        help="retries of a trial whose worker dies, from its last checkpoint "
+        f"(default {sweep.DEFAULT_MAX_FAILURES})",
+    )
+    p.add_argument("--progress", dest="progress", action="store_true", default=None, help="show trial counts")
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="no trial counts")
+
+
 # -- replay ---------------------------------------------------------------------------------------
 def cmd_replay(args: argparse.Namespace) -> int:
     from snakesim import replay, rerun_cli
@@ -526,7 +561,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_evaluate)
 
     p = sub.add_parser("plot", help="learning curves (Figure 3)")
-    p.add_argument("runs", nargs="+", metavar="RUN", help="run directories (or evaluations.csv files)")
+    p.add_argument(
+        "runs", nargs="+", metavar="RUN", help="run directories, evaluations.csv files or sweep folders"
+    )
     p.add_argument("--out", required=True, help="the figure (.png, .pdf or .svg)")
     p.add_argument("--title", help="the figure's title")
     p.add_argument(
@@ -546,6 +583,48 @@ def build_parser() -> argparse.ArgumentParser:
         help="the x axis: timesteps, or the wall time of training (default timesteps)",
     )
     p.set_defaults(func=cmd_plot)
+
+    p = sub.add_parser(
+        "sweep",
+        help="train every config x grid point x seed on a Ray cluster",
+        description="Every (config, grid point, seed) is one run directory under --out, trained as a Ray "
+        "Tune trial. See docs/sweeps.md.",
+    )
+    p.add_argument(
+        "configs", nargs="*", metavar="CONFIG.yaml", help="run configurations (see snake-py/configs/)"
+    )
+    p.add_argument("--out", metavar="SWEEPS/NAME", help="the sweep's folder (new, or empty)")
+    p.add_argument(
+        "--seeds",
+        type=_int_at_least(1, sweep.MAX_SEEDS),
+        help="seeds per config and grid point: the config's seed and the next K-1 (default 1)",
+    )
+    p.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="KEY=V1,V2,...",
+        help="values of a config key to train each config with (repeatable: every combination)",
+    )
+    p.add_argument(
+        "--resume", metavar="SWEEPS/NAME", help="finish an interrupted sweep: run its unfinished trials"
+    )
+    _cluster_options(p)
+    p.set_defaults(func=sweep.command)
+
+    p = sub.add_parser(
+        "search",
+        help="search hyperparameters with Optuna and ASHA on a Ray cluster",
+        description="Optuna chooses each trial's values from --space, ASHA stops trials that trail; the best "
+        "trial's config is written as OUT/best.yaml. See docs/sweeps.md.",
+    )
+    p.add_argument("config", metavar="CONFIG.yaml", help="the run configuration the space varies")
+    p.add_argument("--space", required=True, metavar="SPACE.yaml", help="keys and their distributions")
+    p.add_argument("--trials", required=True, type=_int_at_least(1, sweep.MAX_TRIALS), help="trials to run")
+    p.add_argument("--metric", choices=("success_rate", "mean_return"), default="success_rate")
+    p.add_argument("--out", required=True, metavar="SWEEPS/NAME", help="the search's folder (new, or empty)")
+    _cluster_options(p)
+    p.set_defaults(func=search.command)
 
     p = sub.add_parser(
         "replay", help="the snake at successive moments (Figure 4), animations and Rerun recordings"
@@ -595,6 +674,7 @@ def main(argv: list[str] | None = None) -> int:
     from snakesim.plots import PlotError
     from snakesim.replay import ReplayError
     from snakesim.rerun_log import RecordingError
+    from snakesim.sweep import SweepError
     from snakesim.train import RunDirError, TrainingFailed
 
     try:
@@ -607,6 +687,7 @@ def main(argv: list[str] | None = None) -> int:
         PlotError,
         ReplayError,
         RecordingError,
+        SweepError,
         TrainingFailed,
     ) as error:
         print(f"snakesim {args.command}: error: {_one_line(error)}", file=sys.stderr)

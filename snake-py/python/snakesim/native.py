@@ -23,9 +23,15 @@ class _Progress:
     """Receives the Rust trainer's events: a tqdm bar of timesteps with timesteps/s and the latest
     evaluation, or one line per evaluation without a bar."""
 
-    def __init__(self, show: bool, log: Callable[[str], None]) -> None:
+    def __init__(
+        self,
+        show: bool,
+        log: Callable[[str], None],
+        on_evaluation: Callable[[dict[str, Any]], None] | None = None,
+    ) -> None:
         self.show = show
         self.log = log
+        self.on_evaluation_hook = on_evaluation
         self.bar = None
         self.last_evaluation: dict[str, Any] | None = None
         self.rate = 0.0
@@ -62,6 +68,8 @@ class _Progress:
             self.bar.set_postfix_str(self._postfix())
         else:
             self.log(f"{row['timesteps']} timesteps: {self._postfix()}")
+        if self.on_evaluation_hook is not None:
+            self.on_evaluation_hook(dict(row))
 
     def close(self) -> None:
         if self.bar is not None:
@@ -72,7 +80,8 @@ class _Progress:
 class NativeTrainer:
     """One training session of a native run: a new run, or ``resume=True`` to continue a run
     directory. ``overrides`` are configuration keys over the defaults, or over the run's saved
-    config.yaml when resuming (the Rust side refuses changes to what is learnt)."""
+    config.yaml when resuming (the Rust side refuses changes to what is learnt). ``on_evaluation``
+    is called with each evaluation row as it is written (an exception it raises stops training)."""
 
     def __init__(
         self,
@@ -82,10 +91,12 @@ class NativeTrainer:
         resume: bool = False,
         progress: bool | None = None,
         log: Callable[[str], None] | None = None,
+        on_evaluation: Callable[[dict[str, Any]], None] | None = None,
     ) -> None:
         self.resume = resume
         self.progress = sys.stderr.isatty() if progress is None else progress
         self.log = log or (lambda message: print(message, file=sys.stderr))
+        self.on_evaluation = on_evaluation
         if resume:
             if run_dir is None:
                 raise RunDirError("--resume needs --run-dir (the run to continue)")
@@ -105,7 +116,7 @@ class NativeTrainer:
         import numpy
 
         versions = {"python": platform.python_version(), "numpy": numpy.__version__}
-        progress = _Progress(self.progress, self.log)
+        progress = _Progress(self.progress, self.log, self.on_evaluation)
         started = time.perf_counter()
         try:
             result = _core.train(

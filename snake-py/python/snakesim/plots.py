@@ -43,6 +43,7 @@ class Curve:
     timesteps: np.ndarray
     values: dict[str, np.ndarray]
     wall_time: np.ndarray | None = None
+    label: str | None = None  # a sweep's name for the trial's config and grid point
 
 
 def load_curve(source: str | os.PathLike) -> Curve:
@@ -74,6 +75,38 @@ def load_curve(source: str | os.PathLike) -> Curve:
     return Curve(name, config, timesteps, values, wall_time)
 
 
+def sweep_runs(folder: str | os.PathLike) -> list[tuple[Path, str]]:
+    """The evaluated trials of a sweep (or search) folder as (run directory, label), in plan order."""
+    from snakesim import sweep
+
+    try:
+        manifest = sweep.read_manifest(folder)
+    except sweep.SweepError as error:
+        raise PlotError(str(error)) from None
+    if manifest["kind"] == "sweep":
+        planned = [(t.run_dir(folder), t.group()) for t in manifest["trials"]]
+    else:
+        trials = Path(folder) / sweep.TRIALS_DIR
+        planned = [(d, d.name) for d in sorted(trials.iterdir())] if trials.is_dir() else []
+    runs = [(run, label) for run, label in planned if (run / EVALUATIONS_FILE).is_file()]
+    if not runs:
+        raise PlotError(f"sweep {os.fspath(folder)} has no evaluated trials yet")
+    return runs
+
+
+def load_curves(sources: Sequence[str | os.PathLike]) -> list[Curve]:
+    """Each source's curve; a sweep folder gives its trials', labelled by config and grid point."""
+    from snakesim.sweep import is_sweep
+
+    curves = []
+    for source in sources:
+        if Path(source).is_dir() and is_sweep(source):
+            curves += [dataclasses.replace(load_curve(run), label=label) for run, label in sweep_runs(source)]
+        else:
+            curves.append(load_curve(source))
+    return curves
+
+
 def _experiment_key(config: Mapping[str, Any] | None, name: str) -> str:
     if config is None:
         return f"run:{name}"
@@ -100,7 +133,7 @@ def group_curves(curves: Sequence[Curve], mode: str = "auto") -> list[tuple[str,
     for curve in curves:
         groups.setdefault(_experiment_key(curve.config, curve.name), []).append(curve)
     out = []
-    labels = [_label(members[0].config, members[0].name) for members in groups.values()]
+    labels = [members[0].label or _label(members[0].config, members[0].name) for members in groups.values()]
     for members, label in zip(groups.values(), labels):
         if labels.count(label) > 1:  # same arch/joints/preset but other settings: name the runs
             label = f"{label} [{', '.join(c.name for c in members)}]"
@@ -135,8 +168,9 @@ def plot_runs(
     x: str = "timesteps",
     dpi: int = 150,
 ) -> list[tuple[str, int]]:
-    """Draws the curves into ``out`` (PNG, PDF or SVG by its suffix) against ``x`` (``timesteps`` or
-    ``wall_time``, the run's seconds of training); returns (label, runs) per line."""
+    """Draws the curves of ``sources`` (run directories, evaluations.csv files, sweep folders) into
+    ``out`` (PNG, PDF or SVG by its suffix) against ``x`` (``timesteps`` or ``wall_time``, the run's
+    seconds of training); returns (label, runs) per line."""
     if x not in X_AXES:
         raise PlotError(f"unknown x axis {x!r} (expected one of: {', '.join(X_AXES)})")
     axis = x
@@ -144,7 +178,7 @@ def plot_runs(
         raise PlotError(f"unknown metric {metric!r} (expected one of: {', '.join(METRICS)})")
     if spread not in ("minmax", "std"):
         raise PlotError(f"unknown spread {spread!r} (expected minmax or std)")
-    curves = [load_curve(source) for source in sources]
+    curves = load_curves(sources)
     if axis == "wall_time":
         # The same curves drawn against each evaluation's wall time instead of its timesteps.
         curves = [dataclasses.replace(c, timesteps=c.wall_time) for c in curves]

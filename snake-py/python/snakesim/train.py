@@ -202,7 +202,8 @@ class Trainer:
 
     ``overrides`` are configuration keys (YAML + command line) over the defaults, or over the run's
     saved config.yaml when resuming (keys that define what is learnt cannot change then).
-    ``callbacks`` are extra SB3 callbacks.
+    ``callbacks`` are extra SB3 callbacks; ``on_evaluation`` is called with each evaluation row as it
+    is written.
     """
 
     def __init__(
@@ -215,8 +216,10 @@ class Trainer:
         verbose: int = 0,
         callbacks: Sequence[Any] = (),
         log: Callable[[str], None] | None = None,
+        on_evaluation: Callable[[dict[str, Any]], None] | None = None,
     ) -> None:
         self.resume = resume
+        self.on_evaluation = on_evaluation
         self.verbose = verbose
         self.progress = sys.stderr.isatty() if progress is None else progress
         self.extra_callbacks = list(callbacks)
@@ -437,6 +440,8 @@ class Trainer:
         elif self.verbose:
             self.log(f"{timesteps} timesteps: {_format_eval(row)}")
         self.eval_seconds += time.perf_counter() - start
+        if self.on_evaluation is not None:
+            self.on_evaluation(dict(row))
         return row
 
     # -- the session -------------------------------------------------------------------------------

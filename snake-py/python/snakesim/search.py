@@ -1,0 +1,279 @@
+"""Hyperparameter searches: ``snakesim search CONFIG.yaml --space space.yaml --trials T``.
+
+Optuna picks each trial's values of the keys in the space (Tune's ``OptunaSearch``) and ASHA stops the
+trials that trail the others at the same timesteps; every trial is a run directory under the search's
+folder, as in a sweep (:mod:`snakesim.sweep`). The best trial's configuration is written as
+``best.yaml``, which ``snakesim train --config`` runs.
+
+The space is YAML: every key a configuration key (dotted, or nested mappings), every value one
+distribution::
+
+    ppo.learning_rate: {loguniform: [1.0e-5, 1.0e-3]}
+    ppo.ent_coef: {uniform: [0.0, 0.01]}
+    ppo.n_epochs: {randint: [3, 20]}          # integers, both ends included
+    ppo.n_steps: {choice: [128, 256, 512]}
+    env: {reward: {progress_weight: {uniform: [0.5, 2.0]}}}
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from snakesim import runconfig, sweep
+from snakesim.files import write_atomically
+
+DISTRIBUTIONS = ("uniform", "loguniform", "randint", "choice")
+METRICS = ("success_rate", "mean_return")
+BEST_FILE = "best.yaml"
+#: Most keys in a space.
+MAX_SPACE_KEYS = 100
+#: ASHA lets every trial train this share of the timesteps before it may stop it.
+GRACE_SHARE = 0.25
+ASHA_REDUCTION_FACTOR = 3
+
+
+def _flatten(space: Mapping[str, Any], prefix: str = "") -> dict[str, dict[str, Any]]:
+    out: dict[str, dict[str, Any]] = {}
+    for key, value in space.items():
+        path = f"{prefix}{key}"
+        if isinstance(value, Mapping) and len(value) == 1 and next(iter(value)) in DISTRIBUTIONS:
+            out[path] = dict(value)
+        elif isinstance(value, Mapping) and value:
+            out.update(_flatten(value, f"{path}."))
+        else:
+            raise sweep.SweepError(
+                f"space {path}: expected one distribution, e.g. {{uniform: [LOW, HIGH]}} "
+                f"({', '.join(DISTRIBUTIONS)})"
+            )
+    return out
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def load_space(path: str | os.PathLike, base: Mapping[str, Any]) -> dict[str, tuple[str, list[Any]]]:
+    """The space file as ``{key: (distribution, arguments)}``; every end of a range and every choice
+    is checked as a value of the configuration ``base``."""
+    space = _flatten(runconfig.load_yaml(path))
+    name = os.fspath(path)
+    if not space:
+        raise sweep.SweepError(f"space {name} is empty (expected KEY: {{uniform: [LOW, HIGH]}}, ...)")
+    if len(space) > MAX_SPACE_KEYS:
+        raise sweep.SweepError(f"space {name} has {len(space)} keys, at most {MAX_SPACE_KEYS}")
+    out = {}
+    for key, spec in space.items():
+        (kind, args), where = next(iter(spec.items())), f"space {name}: {key}"
+        if key in ("seed", "eval_seed"):
+            raise sweep.SweepError(f"{where}: seeds are not searched")
+        if not isinstance(args, list) or not args:
+            raise sweep.SweepError(f"{where}: {kind} takes a list, e.g. {kind}: [1, 2]")
+        if kind == "choice":
+            if len(args) > sweep.MAX_GRID_VALUES:
+                raise sweep.SweepError(f"{where}: {len(args)} choices, at most {sweep.MAX_GRID_VALUES}")
+        else:
+            if len(args) != 2 or not all(_number(a) for a in args) or not args[0] < args[1]:
+                raise sweep.SweepError(f"{where}: {kind} takes [LOW, HIGH], two numbers with LOW < HIGH")
+            if kind == "loguniform" and args[0] <= 0:
+                raise sweep.SweepError(f"{where}: loguniform needs LOW > 0")
+            if kind == "randint" and not all(isinstance(a, int) for a in args):
+                raise sweep.SweepError(f"{where}: randint takes two integers")
+        for value in args:
+            try:
+                runconfig.validate(runconfig.merge(base, sweep.nested(key, value)))
+            except runconfig.ConfigError as error:
+                raise runconfig.ConfigError(f"{where} = {value!r}: {error}") from None
+        out[key] = (kind, list(args))
+    return out
+
+
+def _tune_space(space: Mapping[str, tuple[str, list[Any]]]) -> dict[str, Any]:
+    from ray import tune
+
+    make = {
+        "uniform": lambda a: tune.uniform(a[0], a[1]),
+        "loguniform": lambda a: tune.loguniform(a[0], a[1]),
+        "randint": lambda a: tune.randint(a[0], a[1] + 1),  # Tune's upper end is excluded
+        "choice": lambda a: tune.choice(a),
+    }
+    return {key: make[kind](args) for key, (kind, args) in space.items()}
+
+
+def _overrides(base: Mapping[str, Any], params: Mapping[str, Any]) -> dict[str, Any]:
+    return runconfig.merge(base, *(sweep.nested(key, value) for key, value in params.items()))
+
+
+def train_search_trial(params: Mapping[str, Any], base: Mapping[str, Any], trials_dir: str) -> None:
+    """The Tune trainable of a search: the base configuration with the trial's values."""
+    from ray import tune
+
+    from snakesim.tune_runner import train_trial
+
+    name = tune.get_context().get_trial_name()
+    overrides = _overrides(base, {key: _plain(value) for key, value in params.items()})
+    train_trial({"trial": {"name": name, "run_dir": str(Path(trials_dir) / name), "overrides": overrides}})
+
+
+def _plain(value: Any) -> Any:
+    """Optuna's numpy numbers as Python numbers (the configuration is JSON)."""
+    return value.item() if hasattr(value, "item") else value
+
+
+def command(args: Any) -> int:
+    """``snakesim search`` from its parsed arguments (see snakesim.cli)."""
+    return search(
+        args.config,
+        space=args.space,
+        out=args.out,
+        trials=args.trials,
+        metric=args.metric,
+        sets=args.set,
+        address=args.address,
+        cpus_per_trial=args.cpus_per_trial or sweep.DEFAULT_CPUS_PER_TRIAL,
+        max_failures=sweep.DEFAULT_MAX_FAILURES if args.max_failures is None else args.max_failures,
+        progress=args.progress,
+    )
+
+
+def search(
+    config: str | os.PathLike,
+    *,
+    space: str | os.PathLike,
+    out: str | os.PathLike,
+    trials: int,
+    metric: str = "success_rate",
+    sets: Sequence[str] = (),
+    address: str | None = None,
+    cpus_per_trial: int = sweep.DEFAULT_CPUS_PER_TRIAL,
+    max_failures: int = sweep.DEFAULT_MAX_FAILURES,
+    progress: bool | None = None,
+) -> int:
+    """``snakesim search``: returns the exit status."""
+    if metric not in METRICS:
+        raise sweep.SweepError(f"--metric {metric!r}: expected one of {', '.join(METRICS)}")
+    if not 1 <= trials <= sweep.MAX_TRIALS:
+        raise sweep.SweepError(f"--trials must be in [1, {sweep.MAX_TRIALS}], got {trials}")
+    sweep.check_cluster_options(cpus_per_trial, max_failures)
+    out_path = sweep.check_new_out(out)
+    (name, user_base), *_ = sweep.load_configs([config], sets).items()
+    # The trials' CPUs are their threads unless the configuration sets them (as in a sweep).
+    (planned,) = sweep.plan({name: user_base}, {}, 1, cpus_per_trial)
+    base = planned.overrides
+    resolved = runconfig.resolve(base)
+    parsed = load_space(space, base)
+    from ray import tune
+    from ray.tune.schedulers import ASHAScheduler
+    from ray.tune.search.optuna import OptunaSearch
+
+    from snakesim import sweep_summary, tune_runner
+
+    client = tune_runner.connect(address)
+    sweep.write_manifest(
+        out_path,
+        sweep.new_manifest(
+            "search",
+            [],
+            config=os.fspath(config),
+            space={key: {kind: args} for key, (kind, args) in parsed.items()},
+            set=list(sets),
+            metric=metric,
+            budget=trials,
+            cpus_per_trial=cpus_per_trial,
+            max_failures=max_failures,
+        ),
+    )
+    print(f"search {out_path}: {trials} trials of {name} over {', '.join(parsed)} on {client}", flush=True)
+    timesteps = resolved["timesteps"]
+    tune_config = tune.TuneConfig(
+        search_alg=OptunaSearch(metric=metric, mode="max", seed=resolved["seed"]),
+        scheduler=ASHAScheduler(
+            time_attr="timesteps",
+            metric=metric,
+            mode="max",
+            max_t=timesteps,
+            grace_period=max(1, int(timesteps * GRACE_SHARE)),
+            reduction_factor=ASHA_REDUCTION_FACTOR,
+        ),
+        num_samples=trials,
+    )
+    trials_dir = (out_path / sweep.TRIALS_DIR).resolve()
+    outcome = tune_runner.fit(
+        out_path,
+        tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir)),
+        _tune_space(parsed),
+        total=trials,
+        names=lambda trial: f"trial_{trial.trial_id.rsplit('_', 1)[-1]}",
+        cpus_per_trial=cpus_per_trial,
+        max_failures=max_failures,
+        progress=progress,
+        tune_config=tune_config,
+    )
+    done = _searched_trials(out_path, name, base, list(parsed))
+    rows = sweep_summary.summarize(out_path, done)
+    print(sweep_summary.format_table(rows))
+    print(f"wrote {sweep_summary.write_csv(out_path, rows)}")
+    for trial_name, error in outcome.errors.items():
+        print(f"snakesim search: trial {trial_name} failed: {error}", file=sys.stderr)
+    best = _best(out_path, done, metric)
+    if best is None:
+        print("snakesim search: no trial was evaluated; nothing to write", file=sys.stderr)
+        return 130 if outcome.interrupted else 1
+    trial, value = best
+    path = write_best(out_path, _overrides(user_base, trial.point), trial.name, metric, value)
+    print(
+        f"best: {trial.name} ({', '.join(f'{k}={v}' for k, v in trial.point.items())}): final {metric} "
+        f"{value:.4g}; wrote {path}; train it with: snakesim train --config {path}"
+    )
+    return 130 if outcome.interrupted else 0
+
+
+def _searched_trials(
+    out: Path, config: str, base: Mapping[str, Any], keys: Sequence[str]
+) -> list[sweep.Trial]:
+    """The trials that ran, with their values of the searched keys (from their saved config.yaml)."""
+    folder = out / sweep.TRIALS_DIR
+    found = []
+    for run_dir in sorted(folder.iterdir()) if folder.is_dir() else []:
+        try:
+            saved = runconfig.load(run_dir / "config.yaml")
+        except runconfig.ConfigError:
+            continue
+        point = {}
+        for key in keys:
+            value: Any = saved
+            for part in key.split("."):
+                value = value[part]
+            point[key] = value
+        found.append(sweep.Trial(run_dir.name, run_dir.name, point, saved["seed"], dict(base)))
+    return found
+
+
+def _best(out: Path, trials: Sequence[sweep.Trial], metric: str) -> tuple[sweep.Trial, float] | None:
+    """The trial with the best final evaluation (more timesteps break ties: ASHA stopped the others)."""
+    from snakesim.sweep_summary import evaluations
+
+    scored = []
+    for trial in trials:
+        rows = evaluations(trial.run_dir(out))
+        if rows:
+            scored.append(((rows[-1][metric], rows[-1]["timesteps"]), trial))
+    if not scored:
+        return None
+    (value, _), trial = max(scored, key=lambda item: item[0])
+    return trial, value
+
+
+def write_best(out: Path, overrides: Mapping[str, Any], name: str, metric: str, value: float) -> Path:
+    """The configuration of the best trial (the searched config with its values) as YAML."""
+    text = (
+        f"# The best trial of the search {out} ({name}): final {metric} {value:.4g}.\n"
+        f"#   snakesim train --config {out / BEST_FILE}\n" + runconfig.dump(runconfig.validate(overrides))
+    )
+    path = out / BEST_FILE
+    write_atomically(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+    return path

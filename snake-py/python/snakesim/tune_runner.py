@@ -1,0 +1,405 @@
+"""The Ray side of sweeps and searches: connecting to a cluster, the Tune trainable that trains one
+trial in its run directory, and the one-line progress display.
+
+A trial reports every periodic evaluation of its run to Tune as it is written (``timesteps``,
+``mean_return``, ``success_rate``, ...). Its checkpoints are the run's own: with a report after a new
+checkpoint of the run, Tune gets a small checkpoint that points at it. A retried trial (its worker
+died; ``--max-failures``) finds its run directory and resumes it from the latest checkpoint through the
+trainers' own resume, so the run folder must be reachable at the same path from every node (one
+machine, or a shared file system: see docs/sweeps.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import logging
+import os
+import re
+import shutil
+import signal
+import socket
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from snakesim.sweep import TUNE_DIR, SweepError, Trial, next_session, trial_finished
+
+#: Seconds to reach a cluster given by --address before giving up with an error.
+CONNECT_TIMEOUT_S = 30.0
+#: Each training session of a trial, one JSON line, in its run directory.
+SESSIONS_FILE = "sessions.jsonl"
+#: Test hook: the trial of this name kills its own worker (SIGKILL) once, after reporting its first
+#: checkpoint, to exercise retries.
+KILL_ENV = "SNAKESIM_TEST_KILL_TRIAL"
+#: What a trial reports to Tune from each evaluation row.
+METRICS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
+
+
+@dataclasses.dataclass
+class Outcome:
+    """What a Tune session ended with: the final error of each failed trial, and whether Ctrl-C
+    stopped it."""
+
+    errors: dict[str, str] = dataclasses.field(default_factory=dict)
+    interrupted: bool = False
+
+
+# -- connecting -----------------------------------------------------------------------------------
+def _host_port(address: str) -> tuple[str, int]:
+    host, sep, port = address.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise SweepError(f"--address {address!r}: expected HOST:PORT (what `ray start --head` prints)")
+    return host.strip("[]"), int(port)
+
+
+def _quiet_ray_init(**kwargs: Any) -> None:
+    import ray
+
+    ray.init(include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False, **kwargs)
+
+
+def connect(address: str | None, timeout: float = CONNECT_TIMEOUT_S) -> str:
+    """Connects this process to Ray: the cluster at ``address`` (HOST:PORT), or a local Ray started
+    for the sweep. Returns a description; SweepError within ``timeout`` seconds when nothing answers."""
+    import ray
+
+    if ray.is_initialized():
+        ray.shutdown()
+    if address is None:
+        _quiet_ray_init()
+        return f"a local Ray ({_cpus()} CPUs)"
+    host, port = _host_port(address)
+    started = time.monotonic()
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as error:
+        reason = "timed out" if isinstance(error, socket.timeout) else (error.strerror or str(error))
+        raise SweepError(f"cannot reach a Ray cluster at {address}: {reason}") from None
+    # Something listens; Ray itself retries for minutes when it is not Ray: wait for it no longer.
+    failure: list[BaseException] = []
+
+    def init() -> None:
+        try:
+            _quiet_ray_init(address=f"{host}:{port}")
+        except BaseException as error:  # noqa: BLE001 - handed to the waiting thread
+            failure.append(error)
+
+    thread = threading.Thread(target=init, name="snakesim-ray-connect", daemon=True)
+    thread.start()
+    thread.join(max(0.0, timeout - (time.monotonic() - started)))
+    if thread.is_alive():
+        raise SweepError(f"no Ray cluster answered at {address} within {timeout:g} s")
+    if failure:
+        raise SweepError(f"cannot connect to the Ray cluster at {address}: {_last_line(str(failure[0]))}")
+    return f"the Ray cluster at {address} ({_cpus()} CPUs)"
+
+
+def _cpus() -> int:
+    import ray
+
+    return int(ray.cluster_resources().get("CPU", 0))
+
+
+def check_cpus(cpus_per_trial: int) -> None:
+    cpus = _cpus()
+    if cpus < cpus_per_trial:
+        raise SweepError(f"--cpus-per-trial {cpus_per_trial} is more than the cluster's {cpus} CPUs")
+
+
+def _last_line(text: str, limit: int = 300) -> str:
+    """The line of a traceback that names the error (``SomeError: message``), else its last line."""
+    lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
+    named = [line for line in lines if re.match(r"^[\w.]+(Error|Exception|Failed|Interrupted)\b", line)]
+    line = named[-1] if named else (lines[-1] if lines else "unknown error")
+    return line if len(line) <= limit else line[: limit - 3] + "..."
+
+
+# -- the trainable (runs on the workers) ----------------------------------------------------------
+class _Reporter:
+    """Hands each evaluation of a trial's run to Tune, with a pointer to the run's newest checkpoint
+    when there is a new one."""
+
+    def __init__(self, run_dir: Path, native: bool, name: str, started_from: int) -> None:
+        self.run_dir = run_dir
+        self.native = native
+        self.name = name
+        self.started_from = started_from
+        self.reported_checkpoint = started_from
+        self.session_noted = False
+
+    def note_session(self) -> None:
+        """One line in sessions.jsonl: when, where and from which timesteps this session trained."""
+        if self.session_noted:
+            return
+        self.session_noted = True
+        line = {
+            "started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "resumed_from": self.started_from,
+            "host": socket.gethostname(),
+            "pid": os.getpid(),
+        }
+        with open(self.run_dir / SESSIONS_FILE, "a", encoding="utf-8") as f:
+            f.write(json.dumps(line) + "\n")
+
+    def __call__(self, row: Mapping[str, Any]) -> None:
+        from ray import tune
+
+        from snakesim import agents
+
+        self.note_session()  # a new run's folder exists from its first evaluation on
+        metrics = {key: row.get(key) for key in METRICS}
+        metrics["resumed_from"] = self.started_from
+        found = agents.checkpoints(self.run_dir, native=self.native)
+        if not found or found[-1][0] <= self.reported_checkpoint:
+            tune.report(metrics)
+            return
+        steps = found[-1][0]
+        with tempfile.TemporaryDirectory(prefix="snakesim-checkpoint-") as folder:
+            pointer = {"run_dir": str(self.run_dir), "checkpoint": str(found[-1][1]), "timesteps": steps}
+            (Path(folder) / "run_checkpoint.json").write_text(json.dumps(pointer) + "\n")
+            tune.report(metrics, checkpoint=tune.Checkpoint.from_directory(folder))
+        first = self.reported_checkpoint == 0
+        self.reported_checkpoint = steps
+        if first and self.started_from == 0 and os.environ.get(KILL_ENV) == self.name:
+            os.kill(os.getpid(), signal.SIGKILL)
+
+
+def train_trial(param: Mapping[str, Any]) -> None:
+    """The Tune trainable: trains ``param["trial"]`` (name, run_dir, overrides) in its run directory,
+    resuming it when it has checkpoints (a retry, or a resumed sweep)."""
+    from ray import tune
+
+    from snakesim import agents, runconfig
+
+    spec = param["trial"]
+    run_dir = Path(spec["run_dir"])
+    config = runconfig.resolve(spec["overrides"])
+    native = config["trainer"] == "native"
+    if trial_finished(run_dir):
+        # Trained to the end by an earlier attempt that died before Tune heard of it.
+        from snakesim.train import EVALUATIONS_FILE, read_evaluations
+
+        rows = read_evaluations(run_dir / EVALUATIONS_FILE)
+        if rows:
+            tune.report({key: rows[-1][key] for key in METRICS})
+        return
+    found = agents.checkpoints(run_dir, native=native)
+    resume = bool(found) and (run_dir / agents.CONFIG_FILE).is_file()
+    if not resume and run_dir.exists():
+        shutil.rmtree(run_dir)  # an attempt that died before its first checkpoint: start again
+    reporter = _Reporter(run_dir, native, spec["name"], found[-1][0] if resume else 0)
+    log: Callable[[str], None] = lambda message: print(message, file=sys.stderr)  # noqa: E731
+    if native:
+        from snakesim.native import NativeTrainer
+
+        trainer: Any = NativeTrainer(
+            spec["overrides"], run_dir, resume=resume, progress=False, log=log, on_evaluation=reporter
+        )
+    else:
+        from snakesim.train import Trainer
+
+        trainer = Trainer(
+            spec["overrides"], run_dir, resume=resume, progress=False, log=log, on_evaluation=reporter
+        )
+    if resume:
+        reporter.note_session()
+    trainer.run()
+    reporter.note_session()
+
+
+# -- the driver -----------------------------------------------------------------------------------
+class _Display:
+    """Trials running / done / failed, on one line rewritten in place on a terminal, else a line
+    whenever the counts change."""
+
+    def __init__(self, total: int, show: bool, tty: bool) -> None:
+        self.total = total
+        self.show = show
+        self.tty = tty
+        self.state: dict[str, str] = {}
+        self.retries = 0
+        self.latest = ""
+        self.last_line = ""
+
+    def set(self, name: str, state: str) -> None:
+        self.state[name] = state
+        self.draw()
+
+    def result(self, name: str, result: Mapping[str, Any]) -> None:
+        if result.get("timesteps") is not None and result.get("success_rate") is not None:
+            self.latest = (
+                f"; {name}: {int(result['timesteps']):,} timesteps, success {result['success_rate']:.2f}"
+            )
+        if self.tty:
+            self.draw()
+
+    def line(self) -> str:
+        counts = {s: sum(1 for v in self.state.values() if v == s) for s in ("running", "done", "failed")}
+        waiting = self.total - sum(counts.values())
+        text = (
+            f"trials: {counts['running']} running, {counts['done']} done, {counts['failed']} failed, "
+            f"{waiting} waiting (of {self.total})"
+        )
+        if self.retries:
+            text += f", {self.retries} retried"
+        return text
+
+    def draw(self) -> None:
+        if not self.show:
+            return
+        text = self.line()
+        if self.tty:
+            width = shutil.get_terminal_size().columns - 1
+            sys.stderr.write("\r\x1b[K" + (text + self.latest)[:width])
+            sys.stderr.flush()
+        elif text != self.last_line:
+            print(text, file=sys.stderr, flush=True)
+        self.last_line = text
+
+    def close(self) -> None:
+        if self.show and self.tty:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+def _tune_callback(display: _Display, names: Callable[[Any], str]):
+    from ray import tune
+
+    class Progress(tune.Callback):
+        def on_trial_start(self, iteration, trials, trial, **info):
+            display.set(names(trial), "running")
+
+        def on_trial_result(self, iteration, trials, trial, result, **info):
+            display.result(names(trial), result)
+
+        def on_trial_recover(self, iteration, trials, trial, **info):
+            display.retries += 1
+            display.set(names(trial), "waiting")
+
+        def on_trial_complete(self, iteration, trials, trial, **info):
+            display.set(names(trial), "done")
+
+        def on_trial_error(self, iteration, trials, trial, **info):
+            display.set(names(trial), "failed")
+
+    return Progress()
+
+
+class _CtrlC:
+    """The first Ctrl-C stops the trials (Tune ends them and returns); the second one quits at once."""
+
+    def __init__(self) -> None:
+        self.pressed = False
+
+    def __enter__(self):
+        # Tune's own handler would stop the run without telling us; ours tells the stopper below.
+        os.environ["TUNE_DISABLE_SIGINT_HANDLER"] = "1"
+        self.previous = signal.getsignal(signal.SIGINT)
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, self.handle)
+        return self
+
+    def handle(self, signum, frame) -> None:
+        if self.pressed:
+            raise KeyboardInterrupt
+        self.pressed = True
+        print("\nstopping the trials (Ctrl-C again to quit at once)", file=sys.stderr, flush=True)
+
+    def __exit__(self, *exc) -> None:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, self.previous)
+
+    def stopper(self):
+        from ray import tune
+
+        ctrl_c = self
+
+        class StopOnCtrlC(tune.Stopper):
+            def __call__(self, trial_id, result):
+                return False
+
+            def stop_all(self):
+                return ctrl_c.pressed
+
+        return StopOnCtrlC()
+
+
+def fit(
+    out: Path,
+    trainable: Any,
+    param_space: Mapping[str, Any],
+    *,
+    total: int,
+    names: Callable[[Any], str],
+    cpus_per_trial: int,
+    max_failures: int,
+    progress: bool | None,
+    tune_config: Any = None,
+) -> Outcome:
+    """Runs a Tune experiment in ``out/tune/session-N`` with the progress display; returns the final
+    error of each failed trial and whether Ctrl-C stopped it."""
+    from ray import tune
+
+    check_cpus(cpus_per_trial)
+    # Tune's tables and error tracebacks: the display and our one-line errors replace them.
+    os.environ["RAY_AIR_NEW_OUTPUT"] = "0"
+    logging.getLogger("ray.tune").setLevel(logging.CRITICAL)
+    logging.getLogger("ray.train").setLevel(logging.CRITICAL)
+    show = sys.stderr.isatty() if progress is None else progress
+    display = _Display(total, show, sys.stderr.isatty())
+    storage = (out / TUNE_DIR).resolve()
+    storage.mkdir(parents=True, exist_ok=True)
+    tune_config = tune_config or tune.TuneConfig()
+    tune_config.trial_name_creator = names
+    tune_config.trial_dirname_creator = names
+    with _CtrlC() as ctrl_c:
+        tuner = tune.Tuner(
+            tune.with_resources(trainable, {"cpu": cpus_per_trial}),
+            param_space=dict(param_space),
+            tune_config=tune_config,
+            run_config=tune.RunConfig(
+                name=next_session(out),
+                storage_path=str(storage),
+                verbose=0,
+                stop=ctrl_c.stopper(),
+                callbacks=[_tune_callback(display, names)],
+                failure_config=tune.FailureConfig(max_failures=max_failures),
+                checkpoint_config=tune.CheckpointConfig(num_to_keep=1),
+            ),
+        )
+        display.draw()
+        try:
+            results = tuner.fit()
+        finally:
+            display.close()
+    errors = {}
+    for result in results:
+        if result.error is not None:
+            name = Path(result.path).name
+            errors[name] = _last_line(str(result.error))
+    return Outcome(errors=errors, interrupted=ctrl_c.pressed)
+
+
+def run_trials(
+    out: Path, trials: Sequence[Trial], cpus_per_trial: int, max_failures: int, progress: bool | None
+) -> Outcome:
+    """Runs the trials of a sweep: a Tune grid over them."""
+    from ray import tune
+
+    specs = [{"name": t.name, "run_dir": str(t.run_dir(out)), "overrides": t.overrides} for t in trials]
+    return fit(
+        out,
+        train_trial,
+        {"trial": tune.grid_search(specs)},
+        total=len(specs),
+        names=lambda trial: trial.config["trial"]["name"],
+        cpus_per_trial=cpus_per_trial,
+        max_failures=max_failures,
+        progress=progress,
+    )
