@@ -172,7 +172,7 @@ def search(
 
     from snakesim import sweep_summary, tune_runner
 
-    client = tune_runner.connect(address)
+    client = tune_runner.connect(address, cpus_per_trial)
     sweep.write_manifest(
         out_path,
         sweep.new_manifest(

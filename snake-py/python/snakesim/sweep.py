@@ -359,7 +359,8 @@ def run_sweep(
     )
     from snakesim import tune_runner
 
-    client = tune_runner.connect(address)  # before writing anything: an unreachable cluster leaves no folder
+    # Before writing anything: an unreachable or too small cluster leaves no folder behind.
+    client = tune_runner.connect(address, cpus_per_trial)
     write_manifest(out_path, manifest)
     print(f"sweep {out_path}: {len(trials)} trials on {client}", flush=True)
     return _run(out_path, trials, trials, cpus_per_trial, max_failures, progress)
@@ -383,9 +384,12 @@ def resume_sweep(
     out = Path(folder)
     trials = manifest["trials"]
     left = [t for t in trials if not trial_finished(t.run_dir(out))]
+    if not left:
+        print(f"sweep {out}: all {len(trials)} trials have finished")
+        return _run(out, trials, [], cpus, failures, progress)
     from snakesim import tune_runner
 
-    client = tune_runner.connect(address)
+    client = tune_runner.connect(address, cpus)
     print(
         f"sweep {out}: {len(trials) - len(left)} of {len(trials)} trials finished; "
         f"running the other {len(left)} on {client}",

@@ -11,6 +11,7 @@ machine, or a shared file system: see docs/sweeps.md).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime
 import json
@@ -58,21 +59,56 @@ def _host_port(address: str) -> tuple[str, int]:
     return host.strip("[]"), int(port)
 
 
+@contextlib.contextmanager
+def _stderr_silenced():
+    """Ray's C++ core logs every failed attempt to reach a cluster on stderr (a line a second);
+    while connecting, our one-line error says it instead."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 2)
+    os.close(devnull)
+    try:
+        yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def _quiet_ray_init(**kwargs: Any) -> None:
     import ray
 
     ray.init(include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False, **kwargs)
 
 
-def connect(address: str | None, timeout: float = CONNECT_TIMEOUT_S) -> str:
+def _token_auth_if_available() -> None:
+    """Ray turns token authentication on by itself when it starts a local cluster or finds one, if
+    a token exists (~/.ray/auth_token, RAY_AUTH_TOKEN), but not for an explicit address: a cluster
+    started with `ray start` by the same user would refuse us. Do as Ray does for local clusters (a
+    cluster without authentication accepts a driver that has a token)."""
+    if "RAY_AUTH_MODE" in os.environ:
+        return
+    try:
+        from ray._private.authentication.authentication_token_setup import (
+            maybe_enable_token_auth_if_token_available,
+        )
+    except ImportError:  # a Ray without token authentication
+        return
+    maybe_enable_token_auth_if_token_available(warn_if_disabled=False)
+
+
+def connect(address: str | None, cpus_per_trial: int = 1, timeout: float = CONNECT_TIMEOUT_S) -> str:
     """Connects this process to Ray: the cluster at ``address`` (HOST:PORT), or a local Ray started
-    for the sweep. Returns a description; SweepError within ``timeout`` seconds when nothing answers."""
+    for the sweep; checks that it has ``cpus_per_trial`` CPUs. Returns a description; SweepError
+    within ``timeout`` seconds when nothing answers."""
     import ray
 
     if ray.is_initialized():
         ray.shutdown()
     if address is None:
         _quiet_ray_init()
+        _check_cpus(cpus_per_trial)
         return f"a local Ray ({_cpus()} CPUs)"
     host, port = _host_port(address)
     started = time.monotonic()
@@ -90,13 +126,16 @@ def connect(address: str | None, timeout: float = CONNECT_TIMEOUT_S) -> str:
         except BaseException as error:  # noqa: BLE001 - handed to the waiting thread
             failure.append(error)
 
-    thread = threading.Thread(target=init, name="snakesim-ray-connect", daemon=True)
-    thread.start()
-    thread.join(max(0.0, timeout - (time.monotonic() - started)))
+    with _stderr_silenced():
+        _token_auth_if_available()
+        thread = threading.Thread(target=init, name="snakesim-ray-connect", daemon=True)
+        thread.start()
+        thread.join(max(0.0, timeout - (time.monotonic() - started)))
     if thread.is_alive():
         raise SweepError(f"no Ray cluster answered at {address} within {timeout:g} s")
     if failure:
         raise SweepError(f"cannot connect to the Ray cluster at {address}: {_last_line(str(failure[0]))}")
+    _check_cpus(cpus_per_trial)
     return f"the Ray cluster at {address} ({_cpus()} CPUs)"
 
 
@@ -106,7 +145,7 @@ def _cpus() -> int:
     return int(ray.cluster_resources().get("CPU", 0))
 
 
-def check_cpus(cpus_per_trial: int) -> None:
+def _check_cpus(cpus_per_trial: int) -> None:
     cpus = _cpus()
     if cpus < cpus_per_trial:
         raise SweepError(f"--cpus-per-trial {cpus_per_trial} is more than the cluster's {cpus} CPUs")
@@ -346,7 +385,6 @@ def fit(
     error of each failed trial and whether Ctrl-C stopped it."""
     from ray import tune
 
-    check_cpus(cpus_per_trial)
     # Tune's tables and error tracebacks: the display and our one-line errors replace them.
     os.environ["RAY_AIR_NEW_OUTPUT"] = "0"
     logging.getLogger("ray.tune").setLevel(logging.CRITICAL)
@@ -356,6 +394,8 @@ def fit(
     storage = (out / TUNE_DIR).resolve()
     storage.mkdir(parents=True, exist_ok=True)
     tune_config = tune_config or tune.TuneConfig()
+    # A worker trains one trial after another: imports (torch, for SB3) and start-up once per worker.
+    tune_config.reuse_actors = True
     tune_config.trial_name_creator = names
     tune_config.trial_dirname_creator = names
     with _CtrlC() as ctrl_c:

@@ -1,0 +1,318 @@
+"""`snakesim sweep` on Ray: a local Ray head started here (127.0.0.1, 2 CPUs) runs the trials of tiny
+sweeps submitted with --address; a trial whose worker is killed resumes from its checkpoint; an
+interrupted sweep resumes without redoing finished trials; bad input is one line. The cluster is
+stopped when the module's tests end, pass or fail."""
+
+import csv
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+from PIL import Image
+from snakesim import cli
+from snakesim.sweep_summary import SUCCESS_THRESHOLD
+from snakesim.tune_runner import CONNECT_TIMEOUT_S, KILL_ENV
+
+# Rollouts of 2 envs x 256 steps; an evaluation (2 episodes of at most 100 steps) and a checkpoint
+# every 1024 timesteps.
+TINY = {
+    "joints": 3,
+    "timesteps": 4096,
+    "n_envs": 2,
+    "eval_freq": 1024,
+    "checkpoint_freq": 1024,
+    "eval_episodes": 2,
+    "ppo": {"n_steps": 256, "batch_size": 128, "n_epochs": 2},
+    "env": {"max_episode_steps": 100},
+}
+# The goal (0, -10) lies 10 m from the start: with a 11 m goal radius every episode succeeds at its
+# first step, so this config reaches a success rate of 1 at its first evaluation. (Every step is then
+# a reset, which is slow: half the timesteps.)
+NEAR = {**TINY, "timesteps": 2048, "env": {**TINY["env"], "goal_radius": 11.0}}
+# The Stable-Baselines3 trainer, one torch thread.
+FAR_SB3 = {**TINY, "trainer": "sb3", "device": "cpu"}
+FAULT_TRIAL = "fault_seed42"
+RAY = Path(sys.executable).with_name("ray")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def write_config(folder: Path, name: str, config: dict) -> Path:
+    path = folder / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+def snakesim(*argv, timeout=180, env=None):
+    """The snakesim command in a child process (Ray is not imported into the test process)."""
+    return subprocess.run(
+        [sys.executable, "-m", "snakesim", *map(str, argv)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+    )
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A Ray head on 127.0.0.1 with 2 CPUs (its workers import snakesim as this process does, and kill
+    the trial FAULT_TRIAL once); stopped, with all its processes, when the tests end."""
+    port = free_port()
+    temp = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # short: Ray's socket paths have a length limit
+    env = {**os.environ, KILL_ENV: FAULT_TRIAL, "RAY_USAGE_STATS_ENABLED": "0"}
+    # fmt: off
+    head = subprocess.Popen(
+        [
+            RAY, "start", "--head", "--block", "--num-cpus", "2", "--include-dashboard=false",
+            "--node-ip-address", "127.0.0.1", "--port", str(port),
+            "--ray-client-server-port", str(free_port()), "--dashboard-agent-listen-port", str(free_port()),
+            "--temp-dir", temp,
+        ],
+        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+    )
+    # fmt: on
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            assert head.poll() is None, "ray start --head exited"
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                assert time.monotonic() < deadline, "the Ray head did not start within 60 s"
+                time.sleep(0.2)
+        yield {"address": f"127.0.0.1:{port}", "temp": Path(temp)}
+    finally:
+        # `ray start --block` stops the cluster's processes when it is terminated.
+        head.terminate()
+        try:
+            head.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(head.pid, signal.SIGKILL)
+            head.wait()
+        shutil.rmtree(temp, ignore_errors=True)
+
+
+def test_sweep_of_two_configs_and_two_seeds_on_a_cluster(cluster, tmp_path):
+    near = write_config(tmp_path, "near", NEAR)
+    far = write_config(tmp_path, "far", FAR_SB3)
+    out = tmp_path / "sweep"
+    started = time.monotonic()
+    done = snakesim(
+        "sweep", near, far, "--seeds", 2, "--out", out, "--address", cluster["address"], "--progress"
+    )
+    assert done.returncode == 0, done.stderr
+    assert f"4 trials on the Ray cluster at {cluster['address']} (2 CPUs)" in done.stdout
+    assert "trials: 0 running, 4 done, 0 failed, 0 waiting (of 4)" in done.stderr
+    assert "Traceback" not in done.stderr
+    print(f"sweep of 4 trials: {time.monotonic() - started:.1f} s")
+
+    # Every trial is a run directory of its trainer, trained to the end.
+    trials = {p.name: p for p in (out / "trials").iterdir()}
+    assert sorted(trials) == ["far_seed42", "far_seed43", "near_seed42", "near_seed43"]
+    for name, run in trials.items():
+        config = yaml.safe_load((run / "config.yaml").read_text())
+        assert config["seed"] == int(name[-2:])
+        assert config["trainer"] == ("native" if name.startswith("near") else "sb3")
+        model = "model.safetensors" if name.startswith("near") else "model.zip"
+        assert (run / model).is_file() and (run / "versions.json").is_file()
+        rows = read_csv(run / "evaluations.csv")
+        assert [int(r["timesteps"]) for r in rows] == list(range(1024, config["timesteps"] + 1, 1024))
+        sessions = [json.loads(line) for line in (run / "sessions.jsonl").read_text().splitlines()]
+        assert [s["resumed_from"] for s in sessions] == [0]
+    # The trials ran on the test's cluster: its workers' logs are in its temp folder.
+    assert list(cluster["temp"].glob("session_*/logs/worker-*"))
+
+    # The summary: one row per config, means and spreads over the two seeds.
+    summary = {row["config"]: row for row in read_csv(out / "summary.csv")}
+    assert list(summary) == ["near", "far"]
+    to = f"{SUCCESS_THRESHOLD:g}"
+    near_row, far_row = summary["near"], summary["far"]
+    assert (near_row["seeds"], near_row["seeds_evaluated"], near_row[f"seeds_reaching_{to}"]) == (
+        "2",
+        "2",
+        "2",
+    )
+    assert float(near_row["final_success_rate_mean"]) == 1.0
+    assert float(near_row["final_success_rate_std"]) == 0.0
+    assert float(near_row[f"timesteps_to_{to}_mean"]) == 1024.0  # the first evaluation
+    walls = [float(read_csv(trials[f"near_seed{s}"] / "evaluations.csv")[0]["wall_time"]) for s in (42, 43)]
+    assert float(near_row[f"wall_time_to_{to}_mean"]) == pytest.approx(sum(walls) / 2, abs=1e-6)
+    finals = [
+        float(read_csv(trials[f"far_seed{s}"] / "evaluations.csv")[-1]["mean_return"]) for s in (42, 43)
+    ]
+    assert float(far_row["final_return_mean"]) == pytest.approx(sum(finals) / 2, abs=1e-6)
+    assert float(far_row["final_return_std"]) == pytest.approx(abs(finals[0] - finals[1]) / 2**0.5, abs=1e-6)
+    assert float(far_row["final_success_rate_mean"]) == 0.0
+    assert far_row[f"seeds_reaching_{to}"] == "0" and far_row[f"timesteps_to_{to}_mean"] == ""
+    assert float(far_row["final_timesteps_mean"]) == 4096.0
+    table = done.stdout.splitlines()
+    assert any(line.startswith("near ") and "1,024 ± 0" in line and "(2/2 seeds)" in line for line in table)
+    assert any(line.startswith("far ") and "not reached (0/2 seeds)" in line for line in table)
+
+    # The learning curves: one line per config with its seeds' band.
+    figure = tmp_path / "curves.png"
+    plotted = snakesim("plot", out, "--out", figure, "--metric", "success_rate", timeout=60)
+    assert plotted.returncode == 0, plotted.stderr
+    assert plotted.stdout.strip() == f"wrote {figure}: near, 2 runs; far, 2 runs"
+    with Image.open(figure) as image:
+        assert image.size == (1050, 675)
+
+
+def test_a_killed_trial_resumes_from_its_checkpoint(cluster, tmp_path):
+    fault = write_config(tmp_path, "fault", TINY)
+    out = tmp_path / "sweep"
+    done = snakesim(
+        "sweep", fault, "--out", out, "--address", cluster["address"], "--max-failures", 1, "--progress"
+    )
+    assert done.returncode == 0, done.stderr
+    assert "trials: 0 running, 1 done, 0 failed, 0 waiting (of 1), 1 retried" in done.stderr
+    run = out / "trials" / FAULT_TRIAL
+    # The first session's worker died at its second evaluation (2048), after its checkpoint at 1024
+    # had been reported; the retry resumed from that checkpoint, in another worker.
+    sessions = [json.loads(line) for line in (run / "sessions.jsonl").read_text().splitlines()]
+    assert [s["resumed_from"] for s in sessions] == [0, 1024]
+    assert sessions[0]["pid"] != sessions[1]["pid"]
+    # Each evaluation once (the one the dead worker wrote at 2048 was redone), every checkpoint.
+    assert [int(r["timesteps"]) for r in read_csv(run / "evaluations.csv")] == [1024, 2048, 3072, 4096]
+    checkpoints = sorted(int(p.name.split("_")[1]) for p in (run / "checkpoints").glob("*.safetensors"))
+    assert checkpoints == [1024, 2048, 3072, 4096]
+    assert len(list((run / "tb").glob("*/events.out.tfevents.*"))) == 2  # one log per session
+    # Tune heard of both sessions: the retry's results say where it resumed from.
+    results = (out / "tune" / "session-1" / FAULT_TRIAL / "result.json").read_text().splitlines()
+    results = [json.loads(line) for line in results]
+    assert [(r["timesteps"], r["resumed_from"]) for r in results] == [
+        (1024, 0),
+        (2048, 0),
+        (2048, 1024),
+        (3072, 1024),
+        (4096, 1024),
+    ]
+
+
+def test_an_interrupted_sweep_resumes_and_runs_only_the_rest(cluster, tmp_path):
+    config = write_config(tmp_path, "resume", {**TINY, "timesteps": 16384})
+    out = tmp_path / "sweep"
+    # One trial at a time (2 CPUs each): Ctrl-C once the first has finished.
+    argv = [
+        "sweep",
+        config,
+        "--seeds",
+        3,
+        "--out",
+        out,
+        "--address",
+        cluster["address"],
+        "--cpus-per-trial",
+        2,
+    ]
+    sweep = subprocess.Popen(
+        [sys.executable, "-m", "snakesim", *map(str, argv)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 120
+    # A trial trained to the end (a stopped one has a model.safetensors too).
+    final = "checkpoints/model_16384_steps.safetensors"
+    while not list(out.glob(f"trials/*/{final}")):
+        assert sweep.poll() is None and time.monotonic() < deadline, "no trial finished"
+        time.sleep(0.1)
+    sweep.send_signal(signal.SIGINT)
+    stdout, stderr = sweep.communicate(timeout=60)
+    assert sweep.returncode == 130, stderr
+    assert f"continue with: snakesim sweep --resume {out}" in stderr
+    finished = sorted(p.parents[1].name for p in out.glob(f"trials/*/{final}"))
+    assert len(finished) == 1, finished
+    before = {name: (out / "trials" / name / "evaluations.csv").stat().st_mtime_ns for name in finished}
+
+    resumed = snakesim("sweep", "--resume", out, "--address", cluster["address"])
+    assert resumed.returncode == 0, resumed.stderr
+    assert "1 of 3 trials finished; running the other 2" in resumed.stdout
+    for name in ["resume_seed42", "resume_seed43", "resume_seed44"]:
+        run = out / "trials" / name
+        assert [int(r["timesteps"]) for r in read_csv(run / "evaluations.csv")][-1] == 16384
+        sessions = (run / "sessions.jsonl").read_text().splitlines()
+        if name in finished:  # untouched
+            assert len(sessions) == 1
+            assert (run / "evaluations.csv").stat().st_mtime_ns == before[name]
+    summary = read_csv(out / "summary.csv")
+    assert [(r["config"], r["seeds"], r["seeds_evaluated"]) for r in summary] == [("resume", "3", "3")]
+    assert sorted(p.name for p in (out / "tune").iterdir()) == ["session-1", "session-2"]
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["{bad}", "--out", "{out}"], "bad.yaml: foo: unknown field `foo`, expected one of `trainer`"),
+        (["{good}", "--out", "{out}", "--set", "ppo.nope=1"], "ppo.nope: unknown field `nope`"),
+        (["{good}", "--out", "{out}", "--grid", "ppo.n_epochs="], "--grid ppo.n_epochs: the grid is empty"),
+        (
+            ["{good}", "--out", "{out}", "--grid", "ppo.n_epochs=2,,3"],
+            "--grid ppo.n_epochs: the grid is empty",
+        ),
+        (["{good}", "--out", "{folder}"], "exists, is not empty and is not a sweep; choose another --out"),
+        (["--resume", "{folder}"], "is not a sweep folder (no sweep.json)"),
+    ],
+)
+def test_bad_input_is_one_line(tmp_path, capsys, argv, message):
+    write_config(tmp_path, "bad", {**TINY, "foo": 1})
+    write_config(tmp_path, "good", TINY)
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "folder" / "notes.txt").write_text("mine\n")
+    names = {"bad": tmp_path / "bad.yaml", "good": tmp_path / "good.yaml", "out": tmp_path / "out"}
+    names["folder"] = tmp_path / "folder"
+    code = cli.main(["sweep", *(a.format(**names) for a in argv)])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert len(err.splitlines()) == 1 and err.startswith("snakesim sweep: error: ")
+    assert message in err
+    assert not (tmp_path / "out").exists()
+    assert (tmp_path / "folder" / "notes.txt").read_text() == "mine\n"
+
+
+def test_an_unreachable_address_is_one_line_within_the_timeout(tmp_path):
+    good = write_config(tmp_path, "good", TINY)
+    port = free_port()  # nothing listens there
+    started = time.monotonic()
+    done = snakesim("sweep", good, "--out", tmp_path / "out", "--address", f"127.0.0.1:{port}", timeout=120)
+    assert time.monotonic() - started < CONNECT_TIMEOUT_S
+    assert done.returncode == 1
+    assert done.stderr == (
+        f"snakesim sweep: error: cannot reach a Ray cluster at 127.0.0.1:{port}: Connection refused\n"
+    )
+    assert not (tmp_path / "out").exists()
+
+    # Something that accepts connections and never answers (Ray would wait for it for minutes): the
+    # timeout ends the wait (here 3 s instead of CONNECT_TIMEOUT_S).
+    with socket.socket() as silent:
+        silent.bind(("127.0.0.1", 0))
+        silent.listen()
+        address = f"127.0.0.1:{silent.getsockname()[1]}"
+        code = f"from snakesim import tune_runner\ntune_runner.connect({address!r}, timeout=3)"
+        started = time.monotonic()
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+        assert time.monotonic() - started < 15
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"snakesim.sweep.SweepError: no Ray cluster answered at {address} within 3 s"
+    )
