@@ -290,6 +290,30 @@ def test_bad_input_is_one_line(tmp_path, capsys, argv, message):
     assert (tmp_path / "folder" / "notes.txt").read_text() == "mine\n"
 
 
+@pytest.mark.parametrize(
+    "space, message",
+    [
+        ({"ppo": {"learning_rate": {"loguniform": [0.0, 1.0e-3]}}}, "loguniform needs LOW > 0"),
+        ({"ppo.n_epochs": {"randint": [5, 2]}}, "randint takes [LOW, HIGH], two numbers with LOW < HIGH"),
+        ({"ppo.nope": {"uniform": [0, 1]}}, "ppo.nope = 0: ppo.nope: unknown field `nope`"),
+        ({"ppo.batch_size": {"choice": [64, 1]}}, "ppo.batch_size = 1: ppo.batch_size: must be in [2, "),
+        ({"ppo.n_epochs": [1, 2]}, "ppo.n_epochs: expected one distribution"),
+        ({}, "is empty"),
+    ],
+)
+def test_bad_search_space_is_one_line(tmp_path, capsys, space, message):
+    good = write_config(tmp_path, "good", TINY)
+    space_file = tmp_path / "space.yaml"
+    space_file.write_text(yaml.safe_dump(space))
+    argv = ["search", good, "--space", space_file, "--trials", 2, "--out", tmp_path / "out"]
+    code = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert len(err.splitlines()) == 1 and err.startswith("snakesim search: error: ")
+    assert message in err
+    assert not (tmp_path / "out").exists()
+
+
 def test_an_unreachable_address_is_one_line_within_the_timeout(tmp_path):
     good = write_config(tmp_path, "good", TINY)
     port = free_port()  # nothing listens there

@@ -207,7 +207,7 @@ def search(
         tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir)),
         _tune_space(parsed),
         total=trials,
-        names=lambda trial: f"trial_{trial.trial_id.rsplit('_', 1)[-1]}",
+        names=_numbered(),
         cpus_per_trial=cpus_per_trial,
         max_failures=max_failures,
         progress=progress,
@@ -230,6 +230,12 @@ def search(
         f"{value:.4g}; wrote {path}; train it with: snakesim train --config {path}"
     )
     return 130 if outcome.interrupted else 0
+
+
+def _numbered():
+    """Trial names in the order Tune creates the trials: trial_0001, trial_0002, ..."""
+    names: dict[str, str] = {}
+    return lambda trial: names.setdefault(trial.trial_id, f"trial_{len(names) + 1:04d}")
 
 
 def _searched_trials(
