@@ -19,8 +19,9 @@ import pytest
 import yaml
 from PIL import Image
 from snakesim import cli
+from snakesim.sweep import CONNECT_TIMEOUT_S
 from snakesim.sweep_summary import SUCCESS_THRESHOLD
-from snakesim.tune_runner import CONNECT_TIMEOUT_S, KILL_ENV
+from snakesim.tune_runner import KILL_ENV
 
 # Rollouts of 2 envs x 256 steps; an evaluation (2 episodes of at most 100 steps) and a checkpoint
 # every 1024 timesteps.

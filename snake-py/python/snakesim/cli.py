@@ -329,11 +329,12 @@ def _cluster_options(p: argparse.ArgumentParser) -> None:
         "--address",
         metavar="HOST:PORT",
         help="a running Ray cluster (what `ray start --head` prints; default: a local Ray for this command; "
-        "an unreachable one is an error within 30 s)",
+        f"an unreachable one is an error within {sweep.CONNECT_TIMEOUT_S:g} s)",
     )
     p.add_argument(
         "--cpus-per-trial",
         dest="cpus_per_trial",
+        metavar="C",
         type=_threads,
         help=f"CPUs Ray reserves per trial, also its threads unless the config sets them "
         f"(default {sweep.DEFAULT_CPUS_PER_TRIAL})",
@@ -341,6 +342,7 @@ def _cluster_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--max-failures",
         dest="max_failures",
+        metavar="F",
         type=_int_at_least(0, sweep.MAX_FAILURES),
         help="retries of a trial whose worker dies, from its last checkpoint "
         f"(default {sweep.DEFAULT_MAX_FAILURES})",
@@ -596,6 +598,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="SWEEPS/NAME", help="the sweep's folder (new, or empty)")
     p.add_argument(
         "--seeds",
+        metavar="K",
         type=_int_at_least(1, sweep.MAX_SEEDS),
         help="seeds per config and grid point: the config's seed and the next K-1 (default 1)",
     )
@@ -620,7 +623,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("config", metavar="CONFIG.yaml", help="the run configuration the space varies")
     p.add_argument("--space", required=True, metavar="SPACE.yaml", help="keys and their distributions")
-    p.add_argument("--trials", required=True, type=_int_at_least(1, sweep.MAX_TRIALS), help="trials to run")
+    p.add_argument(
+        "--trials", required=True, metavar="T", type=_int_at_least(1, sweep.MAX_TRIALS), help="trials to run"
+    )
     p.add_argument("--metric", choices=("success_rate", "mean_return"), default="success_rate")
     p.add_argument("--out", required=True, metavar="SWEEPS/NAME", help="the search's folder (new, or empty)")
     _cluster_options(p)

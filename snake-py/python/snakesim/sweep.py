@@ -46,6 +46,8 @@ MAX_FAILURES = 100
 DEFAULT_MAX_FAILURES = 2
 #: CPUs Ray reserves for each trial (``--cpus-per-trial``) unless told otherwise.
 DEFAULT_CPUS_PER_TRIAL = 1
+#: Seconds to reach a cluster given by --address before giving up with an error.
+CONNECT_TIMEOUT_S = 30.0
 #: Longest trial folder name (before a number that keeps names apart).
 _MAX_NAME = 100
 

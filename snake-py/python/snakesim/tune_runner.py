@@ -29,10 +29,8 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim.sweep import TUNE_DIR, SweepError, Trial, next_session, trial_finished
+from snakesim.sweep import CONNECT_TIMEOUT_S, TUNE_DIR, SweepError, Trial, next_session, trial_finished
 
-#: Seconds to reach a cluster given by --address before giving up with an error.
-CONNECT_TIMEOUT_S = 30.0
 #: Each training session of a trial, one JSON line, in its run directory.
 SESSIONS_FILE = "sessions.jsonl"
 #: Test hook: the trial of this name kills its own worker (SIGKILL) once, after reporting its first
@@ -164,8 +162,9 @@ class _Reporter:
     """Hands each evaluation of a trial's run to Tune, with a pointer to the run's newest checkpoint
     when there is a new one."""
 
-    def __init__(self, run_dir: Path, native: bool, name: str, started_from: int) -> None:
+    def __init__(self, run_dir: Path, native: bool, name: str, started_from: int, earlier: str = "") -> None:
         self.run_dir = run_dir
+        self.earlier = earlier  # sessions.jsonl of attempts whose folder was cleared
         self.native = native
         self.name = name
         self.started_from = started_from
@@ -184,7 +183,7 @@ class _Reporter:
             "pid": os.getpid(),
         }
         with open(self.run_dir / SESSIONS_FILE, "a", encoding="utf-8") as f:
-            f.write(json.dumps(line) + "\n")
+            f.write(self.earlier + json.dumps(line) + "\n")
 
     def __call__(self, row: Mapping[str, Any]) -> None:
         from ray import tune
@@ -230,22 +229,25 @@ def train_trial(param: Mapping[str, Any]) -> None:
         return
     found = agents.checkpoints(run_dir, native=native)
     resume = bool(found) and (run_dir / agents.CONFIG_FILE).is_file()
+    earlier = ""
     if not resume and run_dir.exists():
-        shutil.rmtree(run_dir)  # an attempt that died before its first checkpoint: start again
-    reporter = _Reporter(run_dir, native, spec["name"], found[-1][0] if resume else 0)
-    log: Callable[[str], None] = lambda message: print(message, file=sys.stderr)  # noqa: E731
+        # An attempt that died before its first checkpoint: start again (the trainers want an empty
+        # folder), keeping the record of its session.
+        sessions = run_dir / SESSIONS_FILE
+        earlier = sessions.read_text(encoding="utf-8") if sessions.is_file() else ""
+        shutil.rmtree(run_dir)
+    reporter = _Reporter(run_dir, native, spec["name"], found[-1][0] if resume else 0, earlier)
+    # Both trainers log to stderr: the worker's log file in Ray's log folder.
     if native:
         from snakesim.native import NativeTrainer
 
         trainer: Any = NativeTrainer(
-            spec["overrides"], run_dir, resume=resume, progress=False, log=log, on_evaluation=reporter
+            spec["overrides"], run_dir, resume=resume, progress=False, on_evaluation=reporter
         )
     else:
         from snakesim.train import Trainer
 
-        trainer = Trainer(
-            spec["overrides"], run_dir, resume=resume, progress=False, log=log, on_evaluation=reporter
-        )
+        trainer = Trainer(spec["overrides"], run_dir, resume=resume, progress=False, on_evaluation=reporter)
     if resume:
         reporter.note_session()
     trainer.run()
