@@ -170,14 +170,16 @@ class _Reporter:
         self.started_from = started_from
         self.reported_checkpoint = started_from
         self.session_noted = False
+        self.started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
 
     def note_session(self) -> None:
-        """One line in sessions.jsonl: when, where and from which timesteps this session trained."""
+        """One line in sessions.jsonl: when, where and from which timesteps this session trained
+        (written once the run's folder exists: a new run's from its first evaluation on)."""
         if self.session_noted:
             return
         self.session_noted = True
         line = {
-            "started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "started": self.started,
             "resumed_from": self.started_from,
             "host": socket.gethostname(),
             "pid": os.getpid(),
