@@ -188,6 +188,9 @@ def search(
         ),
     )
     print(f"search {out_path}: {trials} trials of {name} over {', '.join(parsed)} on {client}", flush=True)
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)  # its "study created" line; the display says more
     timesteps = resolved["timesteps"]
     tune_config = tune.TuneConfig(
         search_alg=OptunaSearch(metric=metric, mode="max", seed=resolved["seed"]),
