@@ -302,7 +302,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         Outcome::Finished(s) => {
             say!(
                 "trained {} timesteps in {:.1} s: {:.0} timesteps/s ({:.0} without evaluations; rollouts {:.1} s, \
-                 updates {:.1} s, {} threads); memory {:.1} -> {:.1} MiB",
+                 updates {:.1} s, {} threads); memory {:.1} MiB after the first update, {:.1} MiB at the end",
                 s.timesteps - s.start_timesteps,
                 s.seconds,
                 s.timesteps_per_second(),

@@ -81,7 +81,8 @@ pub struct Summary {
     pub update_seconds: f64,
     /// The last evaluation.
     pub last_evaluation: Option<EvaluationRow>,
-    /// Resident memory at the start and the end of the session, MiB.
+    /// Resident memory after the session's first update (worlds, buffers and networks allocated,
+    /// so growth from there is what a long run adds) and at its end, MiB.
     pub rss_mib: (f64, f64),
     /// Threads used.
     pub threads: usize,
@@ -289,7 +290,8 @@ struct Run {
     tb: EventWriter,
     episodes: std::collections::VecDeque<(f64, u64, bool)>,
     last_evaluation: Option<EvaluationRow>,
-    rss_start: f64,
+    /// RSS after this session's first update (see [`Summary::rss_mib`]).
+    rss_first_update: Option<f64>,
 }
 
 impl Run {
@@ -367,7 +369,7 @@ impl Run {
             tb,
             episodes: std::collections::VecDeque::with_capacity(100),
             last_evaluation: None,
-            rss_start: rss_mib(),
+            rss_first_update: None,
             config,
         })
     }
@@ -485,7 +487,10 @@ impl Run {
             rollout_seconds: self.rollout_seconds,
             update_seconds: self.update_seconds,
             last_evaluation: self.last_evaluation,
-            rss_mib: (self.rss_start, rss_mib()),
+            rss_mib: {
+                let end = rss_mib();
+                (self.rss_first_update.unwrap_or(end), end)
+            },
             threads: self.threads,
         }
     }
@@ -670,6 +675,8 @@ impl Run {
             let update_seconds = update_start.elapsed().as_secs_f64();
             self.rollout_seconds += rollout_seconds;
             self.update_seconds += update_seconds;
+            let rss = rss_mib();
+            self.rss_first_update.get_or_insert(rss);
             let busy = self.started.elapsed().as_secs_f64() - self.eval_seconds;
             let progress = Progress {
                 timesteps: self.timesteps,
@@ -696,7 +703,7 @@ impl Run {
                 ("time/fps", progress.timesteps_per_second),
                 ("time/rollout_seconds", rollout_seconds),
                 ("time/update_seconds", update_seconds),
-                ("time/rss_mib", rss_mib()),
+                ("time/rss_mib", rss),
             ];
             if let Some(r) = progress.ep_rew_mean {
                 scalars.push(("rollout/ep_rew_mean", r));

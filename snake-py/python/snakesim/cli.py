@@ -192,7 +192,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         d = result.details or {}
         where = (
             f"rollouts {d.get('rollout_seconds', 0):.1f} s, updates {d.get('update_seconds', 0):.1f} s, "
-            f"{d.get('threads')} threads; memory {d['rss_mib'][0]:.0f} -> {d['rss_mib'][1]:.0f} MiB"
+            f"{d.get('threads')} threads; memory {d['rss_mib'][0]:.0f} MiB after the first update, "
+            f"{d['rss_mib'][1]:.0f} MiB at the end"
         )
     else:
         import torch
