@@ -44,8 +44,9 @@
 //! matrixmultiply's AVX2/FMA kernels; about 70 % of this machine's FMA peak at these shapes), with the
 //! elementwise loops (tanh, Adam, clipping) compiled for AVX2 at run time ([`simd`]) and no
 //! allocation per minibatch. A tensor crate with autograd was measured against it on the same update
-//! (`examples/candle_update_bench.rs`, feature `candle-bench`): see the figures in the workspace's
-//! `docs/experiments.md`.
+//! (`examples/candle_update_bench.rs`, feature `candle-bench`:
+//! `cargo run --release -p snake-rl --example candle_update_bench --features candle-bench`): see the
+//! figures in the workspace's `docs/experiments.md`.
 #![deny(missing_docs)]
 
 pub mod bench;
