@@ -74,8 +74,6 @@ const CLIP_RANGE: f32 = 0.2;
 const VF_COEF: f32 = 0.5;
 const MAX_GRAD_NORM: f64 = 0.5;
 const LEARNING_RATE: f64 = 3e-4;
-/// Adam's eps (SB3's for PPO).
-const ADAM_EPS: f64 = 1e-5;
 /// Largest relative disagreement accepted between the two implementations.
 const TOLERANCE: f64 = 1e-5;
 /// Untimed updates before each timed run (first-touch allocations, caches, branch predictors).
@@ -371,13 +369,15 @@ impl Candle {
         let action = linear("action_net")?;
         let value = linear("value_net")?;
         let log_std = var("log_std")?;
+        // Adam's betas and eps as the hand-written optimiser has them (SB3's for PPO).
+        let (beta1, beta2, eps) = Adam::new(0).hyper();
         let optimizer = AdamW::new(
             vars.iter().map(|(_, v)| v.clone()).collect(),
             ParamsAdamW {
                 lr: LEARNING_RATE,
-                beta1: 0.9,
-                beta2: 0.999,
-                eps: ADAM_EPS,
+                beta1,
+                beta2,
+                eps,
                 weight_decay: 0.0,
             },
         )?;
@@ -570,10 +570,11 @@ fn check(arch: Arch, obs_dim: usize, act_dim: usize) -> AnyResult<bool> {
         grad_error.update(grad_diff / grad_scale, name);
 
         let param_scale = largest_magnitude(hand_param).max(f64::MIN_POSITIVE);
+        let (_, _, eps) = Adam::new(0).hyper();
         let d = TOLERANCE * grad_scale;
         let (mut diff, mut over) = (0.0f64, 0.0f64);
         for ((&a, &b), &g) in hand_param.iter().zip(&param).zip(hand_grad) {
-            let adam = LEARNING_RATE * ADAM_EPS / (f64::from(g).abs() + ADAM_EPS).powi(2) * d;
+            let adam = LEARNING_RATE * eps / (f64::from(g).abs() + eps).powi(2) * d;
             let e = (f64::from(a) - f64::from(b)).abs();
             diff = diff.max(e);
             over = over.max(e / (TOLERANCE * param_scale + adam));
