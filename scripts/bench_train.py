@@ -43,6 +43,7 @@ def make_paper_env(joints):
 def profile_sb3(venv, rollouts, seed=0):
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
+    from stable_baselines3.common.logger import Logger
 
     class Clock(BaseCallback):
         def __init__(self):
@@ -59,6 +60,8 @@ def profile_sb3(venv, rollouts, seed=0):
             return True
 
     model = PPO("MlpPolicy", venv, n_steps=N_STEPS, batch_size=64, n_epochs=10, seed=seed, device="cpu")
+    # A logger with no outputs: without one, SB3 makes an empty $TMPDIR/SB3-<date> folder per run.
+    model.set_logger(Logger(folder=None, output_formats=[]))
     clock = Clock()
     total = N_STEPS * venv.num_envs * rollouts
     start = time.perf_counter()

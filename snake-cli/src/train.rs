@@ -5,6 +5,7 @@
 //! of every snakesim run (see `snake_rl::rundir`).
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -203,13 +204,23 @@ impl Observer for Bar {
         }
     }
 
+    fn on_note(&mut self, message: &str) {
+        match &self.bar {
+            Some(bar) => bar.suspend(|| eprintln!("note: {message}")),
+            None => eprintln!("note: {message}"),
+        }
+    }
+
     fn should_stop(&mut self) -> bool {
         self.stop.load(Ordering::Relaxed)
     }
 }
 
-/// Runs `snake-cli train`.
-pub fn run(args: &TrainArgs) -> Result<()> {
+/// Exit status after Ctrl-C (128 + SIGINT), as shells report it.
+const INTERRUPTED: u8 = 130;
+
+/// Runs `snake-cli train`: success, or 130 after Ctrl-C (the state was saved).
+pub fn run(args: &TrainArgs) -> Result<ExitCode> {
     let mut layers = Vec::new();
     if let Some(path) = &args.config {
         let text = std::fs::read_to_string(path)
@@ -245,7 +256,10 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             config.trainer.name()
         );
     }
-    let (resolved, resume_from) = trainer::prepare(&config, &run_dir, args.resume)?;
+    // One writer per run directory: a second one is refused here, before anything is read or written.
+    let lock = trainer::lock_run(&config, &run_dir, args.resume)?;
+    let prepared = trainer::prepare(&config, &lock, args.resume)?;
+    let resolved = prepared.config.clone();
     say!(
         "run {}: PPO-{}, {} joints, preset {}, {} timesteps, {} envs, seed {}{}",
         run_dir.display(),
@@ -255,7 +269,10 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         resolved.timesteps,
         resolved.n_envs,
         resolved.seed,
-        resume_from.map_or(String::new(), |(s, _)| format!(" (resuming from {s})"))
+        prepared.resume.as_ref().map_or(String::new(), |p| format!(
+            " (resuming from {})",
+            p.timesteps
+        ))
     )?;
 
     let stop = Arc::new(AtomicBool::new(false));
@@ -284,20 +301,22 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         resume: args.resume,
         versions: Map::new(),
     };
-    let outcome = trainer::train(&session, &mut observer);
+    let outcome = trainer::train_prepared(&session, &lock, prepared, &mut observer);
     if let Some(bar) = &observer.bar {
         bar.finish_and_clear();
     }
     match outcome? {
         Outcome::Interrupted(s, path) => {
-            bail!(
+            // Stopping was asked for, and what was trained is saved: no `error:`.
+            eprintln!(
                 "interrupted at {} timesteps; saved {} and {}/model.safetensors; continue with: \
                  snake-cli train --run-dir {} --resume",
                 s.timesteps,
                 path.display(),
                 run_dir.display(),
                 run_dir.display()
-            )
+            );
+            Ok(ExitCode::from(INTERRUPTED))
         }
         Outcome::Finished(s) => {
             say!(
@@ -329,7 +348,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
                 "wrote {}/model.safetensors, evaluations.csv, config.yaml, versions.json, tb/, checkpoints/",
                 run_dir.display()
             )?;
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
     }
 }

@@ -10,6 +10,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use snake_core::env::{EnvConfig, Info, ResetOptions, SnakeEnv};
 use snake_core::{StartPose, VecSnakeEnv};
 
+mod lock;
 mod native;
 
 /// snake-core's errors as Python exceptions: bad input is a ValueError, a failing engine a RuntimeError.
@@ -397,5 +398,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
     m.add_class::<VecEnv>()?;
     native::register(m)?;
+    lock::register(m)?;
     Ok(())
 }

@@ -19,6 +19,7 @@ use snake_rl::rundir::EvaluationRow;
 use snake_rl::trainer::{self, Observer, Outcome, Progress, Session};
 
 use super::config_error;
+use crate::lock::PyWriterLock;
 
 fn json_value(text: &str, what: &str) -> PyResult<Value> {
     serde_json::from_str(text)
@@ -315,6 +316,18 @@ impl Observer for PyObserver {
         self.call("on_evaluation", move |py| evaluation_dict(py, &row));
     }
 
+    fn on_note(&mut self, message: &str) {
+        let handled = Python::attach(|py| self.target.bind(py).hasattr("on_note").unwrap_or(false));
+        if handled {
+            let message = message.to_owned();
+            self.call("on_note", move |py| {
+                Ok(message.into_pyobject(py)?.into_any())
+            });
+        } else {
+            eprintln!("note: {message}");
+        }
+    }
+
     fn should_stop(&mut self) -> bool {
         if self.error.is_some() {
             return true;
@@ -349,14 +362,48 @@ fn env_throughput(
         })
 }
 
-/// train(config_json, run_dir, resume, versions_json, observer) -> dict: trains a run with the native
-/// trainer. The dict has the session's figures, `interrupted` and, when interrupted, `checkpoint`; a
-/// KeyboardInterrupt during training ends it that way (after saving), other errors raise.
+fn train_error(e: trainer::TrainError) -> PyErr {
+    match e {
+        trainer::TrainError::Setup(m) => PyValueError::new_err(m),
+        trainer::TrainError::Io(m) => PyOSError::new_err(m),
+        other => PyRuntimeError::new_err(other.to_string()),
+    }
+}
+
+/// resume_point(config_json, lock) -> (timesteps, path, skipped): the checkpoint a resumed native run
+/// continues from (its newest that loads) and one line per newer one skipped; ValueError when it
+/// cannot be resumed.
+#[pyfunction]
+fn resume_point(
+    py: Python<'_>,
+    config_json: &str,
+    lock: &Bound<'_, PyWriterLock>,
+) -> PyResult<(u64, String, Vec<String>)> {
+    let config = RunConfig::from_layers(&[json_value(config_json, "the configuration")?])
+        .map_err(config_error)?;
+    let held = lock.borrow().take()?;
+    let prepared = py.detach(|| trainer::prepare(&config, &held, true));
+    lock.borrow().put_back(held);
+    let point = prepared
+        .map_err(train_error)?
+        .resume
+        .expect("a resumed run has a resume point");
+    Ok((
+        point.timesteps,
+        point.path.display().to_string(),
+        point.skipped,
+    ))
+}
+
+/// train(config_json, lock, resume, versions_json, observer) -> dict: trains a run with the native
+/// trainer in the run directory that `lock` (from `lock_run_dir`) holds. The dict has the session's
+/// figures, `interrupted` and, when interrupted, `checkpoint`; a KeyboardInterrupt during training
+/// ends it that way (after saving), other errors raise.
 #[pyfunction]
 fn train<'py>(
     py: Python<'py>,
     config_json: &str,
-    run_dir: PathBuf,
+    lock: &Bound<'py, PyWriterLock>,
     resume: bool,
     versions_json: &str,
     observer: Py<PyAny>,
@@ -366,9 +413,10 @@ fn train<'py>(
     let Value::Object(versions) = json_value(versions_json, "versions")? else {
         return Err(PyValueError::new_err("versions must be a JSON mapping"));
     };
+    let held = lock.borrow().take()?;
     let session = Session {
         config,
-        run_dir,
+        run_dir: held.folder().to_path_buf(),
         resume,
         versions,
     };
@@ -378,12 +426,12 @@ fn train<'py>(
         last_step: Instant::now(),
         last_check: Instant::now(),
     };
-    let outcome = py.detach(|| trainer::train(&session, &mut obs));
-    let outcome = outcome.map_err(|e| match e {
-        trainer::TrainError::Setup(m) => PyValueError::new_err(m),
-        trainer::TrainError::Io(m) => PyOSError::new_err(m),
-        other => PyRuntimeError::new_err(other.to_string()),
-    })?;
+    let outcome = py.detach(|| {
+        trainer::prepare(&session.config, &held, resume)
+            .and_then(|prepared| trainer::train_prepared(&session, &held, prepared, &mut obs))
+    });
+    lock.borrow().put_back(held);
+    let outcome = outcome.map_err(train_error)?;
     let (summary, checkpoint) = match outcome {
         Outcome::Finished(s) => (s, None),
         Outcome::Interrupted(s, path) => (s, Some(path)),
@@ -424,6 +472,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parse_yaml, m)?)?;
     m.add_function(wrap_pyfunction!(parse_overrides, m)?)?;
     m.add_function(wrap_pyfunction!(train, m)?)?;
+    m.add_function(wrap_pyfunction!(resume_point, m)?)?;
     m.add_function(wrap_pyfunction!(env_throughput, m)?)?;
     m.add_class::<NativePolicy>()?;
     m.add("IDENTITY_KEYS", snake_rl::config::IDENTITY_KEYS.to_vec())?;

@@ -58,6 +58,7 @@ pub mod bench;
 pub mod buffer;
 pub mod config;
 pub mod evaluate;
+pub mod lock;
 pub mod model;
 pub mod nn;
 pub mod normalize;

@@ -257,6 +257,9 @@ pub fn save_checkpoint(path: &Path, c: &Checkpoint) -> std::io::Result<()> {
     write_atomically(path, &serialize(&entries, meta))
 }
 
+/// A running statistic's count: SB3's starts at 1e-4 and only grows.
+const COUNT_RANGE: std::ops::RangeInclusive<f64> = f64::MIN_POSITIVE..=f64::MAX;
+
 /// A parsed file: its tensors and metadata.
 struct Parsed<'a> {
     path: &'a Path,
@@ -306,6 +309,29 @@ impl<'a> Parsed<'a> {
         let text = self.meta(key)?;
         text.parse()
             .map_err(|_| self.error(format!("metadata '{key}' = '{text}' is not valid")))
+    }
+
+    /// A finite number in `range` (a count, a discount, a time): NaN or an impossible value in a
+    /// model's metadata would poison every observation or step it touches, so it is refused by name.
+    fn parse_in(&self, key: &str, range: std::ops::RangeInclusive<f64>) -> Result<f64, ModelError> {
+        let value: f64 = self.parse(key)?;
+        if !value.is_finite() || !range.contains(&value) {
+            return Err(self.error(format!(
+                "metadata '{key}' = {value} is out of range (expected a finite number in [{}, {}])",
+                range.start(),
+                range.end()
+            )));
+        }
+        Ok(value)
+    }
+
+    /// Variances: finite (see [`Parsed::f64s`]) and never negative.
+    fn variances(&self, name: &str, len: usize) -> Result<Vec<f64>, ModelError> {
+        let v = self.f64s(name, len)?;
+        if v.iter().any(|&x| x < 0.0) {
+            return Err(self.error(format!("tensor '{name}' holds negative variances")));
+        }
+        Ok(v)
     }
 
     fn values<T, const B: usize>(
@@ -399,8 +425,8 @@ impl<'a> Parsed<'a> {
         let obs_rms = if normalize {
             Some(RunningMeanStd {
                 mean: self.f64s("obs_rms.mean", obs_dim)?,
-                var: self.f64s("obs_rms.var", obs_dim)?,
-                count: self.parse("obs_rms.count")?,
+                var: self.variances("obs_rms.var", obs_dim)?,
+                count: self.parse_in("obs_rms.count", COUNT_RANGE)?,
             })
         } else {
             None
@@ -438,13 +464,13 @@ pub fn load_checkpoint(path: &Path) -> Result<Checkpoint, ModelError> {
     let normalizer = match &policy.obs_rms {
         None => None,
         Some(obs_rms) => {
-            let gamma: f64 = p.parse("normalize.gamma")?;
+            let gamma = p.parse_in("normalize.gamma", 0.0..=1.0)?;
             let mut norm = Normalizer::new(policy.net.obs_dim(), 0, gamma);
             norm.obs_rms = obs_rms.clone();
             norm.ret_rms = RunningMeanStd {
                 mean: p.f64s("ret_rms.mean", 1)?,
-                var: p.f64s("ret_rms.var", 1)?,
-                count: p.parse("ret_rms.count")?,
+                var: p.variances("ret_rms.var", 1)?,
+                count: p.parse_in("ret_rms.count", COUNT_RANGE)?,
             };
             Some(norm)
         }
@@ -456,7 +482,7 @@ pub fn load_checkpoint(path: &Path) -> Result<Checkpoint, ModelError> {
         normalizer,
         rng,
         n_updates: p.parse("n_updates")?,
-        wall_time: p.parse("wall_time")?,
+        wall_time: p.parse_in("wall_time", 0.0..=f64::MAX)?,
         reason: p.meta("reason")?.to_owned(),
         policy,
     })

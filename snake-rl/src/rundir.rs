@@ -7,6 +7,7 @@
 //! tb/PPO_1/            TensorBoard scalars (train/*, rollout/*, eval/*, time/*)
 //! checkpoints/         model_<T>_steps.safetensors (native) or .zip (SB3), each with a .json note
 //! model.safetensors    the final policy (native; SB3 runs have model.zip)
+//! writer.lock          who writes the run now (see [`crate::lock`]: one writer per run directory)
 //! ```
 
 use std::fs::OpenOptions;
@@ -16,6 +17,7 @@ use std::path::{Path, PathBuf};
 use serde_json::{json, Map, Value};
 
 use crate::config::{ConfigError, RunConfig};
+use crate::lock::{is_empty_but_lock, WriterLock, LOCK_FILE};
 use crate::model::write_atomically;
 
 /// `config.yaml`.
@@ -54,6 +56,52 @@ fn io(path: &Path, e: std::io::Error) -> RunDirError {
     ))
 }
 
+/// How a run directory is named in messages.
+const WHAT: &str = "run directory";
+
+fn not_empty(path: &Path) -> RunDirError {
+    RunDirError(format!(
+        "run directory {} already exists and is not empty: pass --resume to continue it, or choose \
+         another --run-dir",
+        path.display()
+    ))
+}
+
+/// Takes the run directory's writer lock ([`crate::lock`]) before anything in it is read or written,
+/// and holds it for as long as the returned lock lives. A new run's folder must be absent or empty
+/// (it is created); a resumed run's must exist. A folder another process is writing is refused at
+/// once, naming that process.
+pub fn lock_run_dir(path: &Path, new_run: bool) -> Result<WriterLock, RunDirError> {
+    let held = |e: crate::lock::LockError| RunDirError(e.0);
+    if new_run {
+        if path.exists() && !path.is_dir() {
+            return Err(RunDirError(format!(
+                "run directory {} exists and is not a directory",
+                path.display()
+            )));
+        }
+        if path.is_dir() && !is_empty_but_lock(path) {
+            if path.join(LOCK_FILE).is_file() {
+                // A run being written says so, rather than only "not empty".
+                WriterLock::acquire(path, WHAT).map_err(held)?;
+            }
+            return Err(not_empty(path));
+        }
+        std::fs::create_dir_all(path).map_err(|e| io(path, e))?;
+    } else if !path.is_dir() {
+        return Err(RunDirError(format!(
+            "cannot resume {}: no such directory",
+            path.display()
+        )));
+    }
+    let lock = WriterLock::acquire(path, WHAT).map_err(held)?;
+    if new_run && !is_empty_but_lock(path) {
+        // Another run started and ended there between the check above and the lock.
+        return Err(not_empty(path));
+    }
+    Ok(lock)
+}
+
 /// One row of `evaluations.csv`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EvaluationRow {
@@ -78,20 +126,16 @@ pub struct RunDir {
 }
 
 impl RunDir {
-    /// A new run in `path`, which must not exist or be an empty directory: writes config.yaml,
-    /// versions.json and the evaluations.csv header.
+    /// A new run in `path`, locked by `lock` (see [`lock_run_dir`]) and empty but for the lock:
+    /// writes config.yaml, versions.json and the evaluations.csv header.
     pub fn create(
-        path: &Path,
+        lock: &WriterLock,
         config: &RunConfig,
         versions: &Map<String, Value>,
     ) -> Result<Self, RunDirError> {
-        if path.exists()
-            && (!path.is_dir() || path.read_dir().map_or(true, |mut d| d.next().is_some()))
-        {
-            return Err(RunDirError(format!(
-                "run directory {} already exists and is not empty: resume it, or choose another",
-                path.display()
-            )));
+        let path = lock.folder();
+        if !is_empty_but_lock(path) {
+            return Err(not_empty(path));
         }
         std::fs::create_dir_all(path.join(CHECKPOINT_DIR)).map_err(|e| io(path, e))?;
         let dir = RunDir {

@@ -22,12 +22,13 @@ use snake_core::{EnvConfig, VecSnakeEnv};
 use crate::buffer::RolloutBuffer;
 use crate::config::{RunConfig, TrainerKind};
 use crate::evaluate::{run_episodes, summarize, EvalError};
+use crate::lock::{is_empty_but_lock, WriterLock};
 use crate::model::{self, Checkpoint, EnvSpec, SavedPolicy};
 use crate::nn::{init_params, ActorCritic, Workspace};
 use crate::normalize::Normalizer;
 use crate::policy::Policy;
 use crate::ppo::{act, Learner, LossScratch, LossSettings, UpdateSettings, UpdateStats};
-use crate::rundir::{EvaluationRow, RunDir, MODEL_FILE};
+use crate::rundir::{lock_run_dir, EvaluationRow, RunDir, MODEL_FILE};
 use crate::tensorboard::EventWriter;
 
 /// Why training stopped with an error. Every message is one line.
@@ -132,6 +133,10 @@ pub trait Observer {
     fn on_update(&mut self, _progress: &Progress) {}
     /// After every evaluation.
     fn on_evaluation(&mut self, _row: &EvaluationRow) {}
+    /// Something the user should know that is not an error (a skipped checkpoint); one line.
+    fn on_note(&mut self, message: &str) {
+        eprintln!("note: {message}");
+    }
     /// Asked between env steps: true stops training (a checkpoint is saved first).
     fn should_stop(&mut self) -> bool {
         false
@@ -142,7 +147,9 @@ pub trait Observer {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Silent;
 
-impl Observer for Silent {}
+impl Observer for Silent {
+    fn on_note(&mut self, _message: &str) {}
+}
 
 /// Resident set size of this process, MiB (0 where /proc is missing).
 pub fn rss_mib() -> f64 {
@@ -186,32 +193,71 @@ pub struct Session {
     pub versions: Map<String, Value>,
 }
 
-/// Checks a session before anything is written: a new run's directory must be free; a resumed run
-/// must have a checkpoint below its timesteps, and may not change what it learns. Returns the
-/// configuration to train with and, when resuming, the checkpoint.
-pub fn prepare(
-    config: &RunConfig,
-    run_dir: &Path,
-    resume: bool,
-) -> Result<(RunConfig, Option<(u64, PathBuf)>), TrainError> {
+/// What a session starts from: the configuration to train with and, when resuming, the checkpoint.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The configuration (for a resumed run: the saved one with the allowed changes), resolved.
+    pub config: RunConfig,
+    /// The checkpoint a resumed run continues from.
+    pub resume: Option<ResumePoint>,
+}
+
+/// The newest checkpoint of a run that loads, and the newer ones that did not.
+#[derive(Debug, Clone)]
+pub struct ResumePoint {
+    /// Its timesteps.
+    pub timesteps: u64,
+    /// Its file.
+    pub path: PathBuf,
+    /// One line for each newer checkpoint that was skipped: its file and why it cannot be used.
+    pub skipped: Vec<String>,
+    checkpoint: Checkpoint,
+}
+
+fn check_native(config: &RunConfig) -> Result<(), TrainError> {
     if config.trainer != TrainerKind::Native {
         return Err(TrainError::Setup(format!(
             "trainer {} is not the native trainer (run it with `snakesim train`)",
             config.trainer.name()
         )));
     }
-    config.validate().map_err(|e| TrainError::Setup(e.0))?;
+    config.validate().map_err(|e| TrainError::Setup(e.0))
+}
+
+/// Takes the run directory's writer lock for a session ([`lock_run_dir`]: one writer per run
+/// directory), after checking the configuration, so that a bad one leaves no folder behind.
+pub fn lock_run(
+    config: &RunConfig,
+    run_dir: &Path,
+    resume: bool,
+) -> Result<WriterLock, TrainError> {
+    check_native(config)?;
+    lock_run_dir(run_dir, !resume).map_err(|e| TrainError::Setup(e.0))
+}
+
+/// Checks a session whose run directory `lock` holds, before anything is written: a new run's
+/// directory must be empty; a resumed run must have a checkpoint below its timesteps, and may not
+/// change what it learns. A resumed run continues from its newest checkpoint that loads; each newer
+/// one that does not is named in [`ResumePoint::skipped`].
+pub fn prepare(
+    config: &RunConfig,
+    lock: &WriterLock,
+    resume: bool,
+) -> Result<Prepared, TrainError> {
+    check_native(config)?;
+    let run_dir = lock.folder();
     if !resume {
-        if run_dir.exists()
-            && (!run_dir.is_dir() || run_dir.read_dir().map_or(true, |mut d| d.next().is_some()))
-        {
+        if !is_empty_but_lock(run_dir) {
             return Err(TrainError::Setup(format!(
                 "run directory {} already exists and is not empty: pass --resume to continue it, or \
                  choose another --run-dir",
                 run_dir.display()
             )));
         }
-        return Ok((config.resolved(), None));
+        return Ok(Prepared {
+            config: config.resolved(),
+            resume: None,
+        });
     }
     let (dir, saved) = RunDir::open(run_dir).map_err(|e| TrainError::Setup(e.0))?;
     let config = config.resolved();
@@ -221,25 +267,73 @@ pub fn prepare(
             run_dir.display()
         )));
     }
-    let Some((steps, path)) = dir.checkpoints().pop() else {
+    let found = dir.checkpoints();
+    if found.is_empty() {
         return Err(TrainError::Setup(format!(
             "cannot resume {}: it has no native checkpoints",
             run_dir.display()
         )));
-    };
-    if steps >= config.timesteps {
-        return Err(TrainError::Setup(format!(
-            "{} already has {steps} timesteps (>= timesteps {}); pass a larger --timesteps to train on",
-            run_dir.display(),
-            config.timesteps
-        )));
     }
-    Ok((config, Some((steps, path))))
+    let mut skipped = Vec::new();
+    for (steps, path) in found.into_iter().rev() {
+        match model::load_checkpoint(&path) {
+            Ok(checkpoint) if checkpoint.policy.timesteps == steps => {
+                if steps >= config.timesteps {
+                    return Err(TrainError::Setup(format!(
+                        "{} already has {steps} timesteps (>= timesteps {}); pass a larger \
+                         --timesteps to train on",
+                        run_dir.display(),
+                        config.timesteps
+                    )));
+                }
+                return Ok(Prepared {
+                    config,
+                    resume: Some(ResumePoint {
+                        timesteps: steps,
+                        path,
+                        skipped,
+                        checkpoint,
+                    }),
+                });
+            }
+            Ok(checkpoint) => skipped.push(format!(
+                "skipped checkpoint {}: it holds {} timesteps, not the {steps} its name says",
+                path.display(),
+                checkpoint.policy.timesteps
+            )),
+            Err(e) => skipped.push(format!("skipped checkpoint {}: {e}", path.display())),
+        }
+    }
+    Err(TrainError::Setup(format!(
+        "cannot resume {}: none of its checkpoints loads ({})",
+        run_dir.display(),
+        skipped.join("; ")
+    )))
 }
 
-/// Trains: the run described by `session`, reporting to `observer`.
+/// Trains: the run described by `session`, reporting to `observer`. Holds the run directory's lock
+/// for the whole session.
 pub fn train(session: &Session, observer: &mut dyn Observer) -> Result<Outcome, TrainError> {
-    let (config, resume_from) = prepare(&session.config, &session.run_dir, session.resume)?;
+    let lock = lock_run(&session.config, &session.run_dir, session.resume)?;
+    let prepared = prepare(&session.config, &lock, session.resume)?;
+    train_prepared(session, &lock, prepared, observer)
+}
+
+/// Trains a session already locked ([`lock_run`]) and prepared ([`prepare`]).
+pub fn train_prepared(
+    session: &Session,
+    lock: &WriterLock,
+    prepared: Prepared,
+    observer: &mut dyn Observer,
+) -> Result<Outcome, TrainError> {
+    if lock.folder() != session.run_dir {
+        return Err(TrainError::Setup(format!(
+            "the lock held is for {}, not the run directory {}",
+            lock.folder().display(),
+            session.run_dir.display()
+        )));
+    }
+    let Prepared { config, resume } = prepared;
     let threads = config
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
@@ -250,19 +344,18 @@ pub fn train(session: &Session, observer: &mut dyn Observer) -> Result<Outcome, 
             .build()
             .map_err(|e| TrainError::Setup(format!("cannot start {threads} threads: {e}")))?,
     );
-    let checkpoint = match &resume_from {
-        Some((_, path)) => Some(model::load_checkpoint(path).map_err(|e| TrainError::Setup(e.0))?),
-        None => None,
-    };
     let mut versions = native_versions();
     versions.extend(session.versions.clone());
-    let dir = if let Some((steps, _)) = &resume_from {
+    let (dir, checkpoint) = if let Some(point) = resume {
+        for line in &point.skipped {
+            observer.on_note(line);
+        }
         let (dir, _) = RunDir::open(&session.run_dir).map_err(|e| TrainError::Setup(e.0))?;
-        dir.keep_evaluations_up_to(*steps)?;
-        dir.note_resume_versions(*steps, &versions)?;
-        dir
+        dir.keep_evaluations_up_to(point.timesteps)?;
+        dir.note_resume_versions(point.timesteps, &versions)?;
+        (dir, Some(point.checkpoint))
     } else {
-        RunDir::create(&session.run_dir, &config, &versions)?
+        (RunDir::create(lock, &config, &versions)?, None)
     };
     let mut run = Run::new(config, dir, threads, checkpoint)?;
     // The loop itself stays on the caller's thread (a Python caller checks for Ctrl-C there; only the

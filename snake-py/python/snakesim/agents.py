@@ -92,6 +92,26 @@ def checkpoints(run_dir: str | os.PathLike, native: bool = False) -> list[tuple[
     return sorted(found)
 
 
+def _head(path: str | os.PathLike, size: int) -> bytes:
+    try:
+        with open(path, "rb") as f:
+            return f.read(size)
+    except OSError:
+        return b""
+
+
+def model_format(path: str | os.PathLike) -> str | None:
+    """What a model file holds, judged by its first bytes rather than its name: ``"safetensors"`` (a
+    snakesim model: an 8-byte header length, then the JSON header), ``"zip"`` (a Stable-Baselines3
+    model), or None (neither, or unreadable)."""
+    head = _head(path, 9)
+    if head[:4] == b"PK\x03\x04":
+        return "zip"
+    if len(head) == 9 and head[8:9] == b"{" and 0 < int.from_bytes(head[:8], "little") < 1 << 32:
+        return "safetensors"
+    return None
+
+
 def _first_line(error: BaseException, limit: int = 160) -> str:
     """The error's type and the start of its first line, for a one-line message."""
     lines = str(error).strip().splitlines()
@@ -252,7 +272,13 @@ def load_agent(
     source = Path(source)
     config = None
     normalizer_path = None
-    native = source.suffix == ".safetensors"
+    kind = model_format(source) if source.is_file() else None
+    if source.is_file() and kind is None and source.suffix not in (".zip", ".safetensors"):
+        raise AgentError(
+            f"{source} is neither a snakesim model (safetensors) nor a Stable-Baselines3 model (zip): "
+            f"it starts with {_head(source, 8)!r}"
+        )
+    native = kind == "safetensors" or (kind is None and source.suffix == ".safetensors")
     if source.is_dir() and (source / CONFIG_FILE).is_file():
         try:
             native = runconfig.load(source / CONFIG_FILE)["trainer"] == "native"

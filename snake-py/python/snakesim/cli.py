@@ -16,10 +16,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -673,7 +675,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@contextlib.contextmanager
+def _scratch_for_torch():
+    """torch makes a compile cache (``$TMPDIR/torchinductor_<user>``) the first time a command loads an
+    SB3 model, and never removes it; snakesim compiles nothing, so each command gives torch a
+    temporary one, removed on exit (unless the user chose one with TORCHINDUCTOR_CACHE_DIR)."""
+    if "TORCHINDUCTOR_CACHE_DIR" in os.environ:
+        yield
+        return
+    with tempfile.TemporaryDirectory(prefix="snakesim-torch-") as scratch:
+        os.environ["TORCHINDUCTOR_CACHE_DIR"] = scratch
+        try:
+            yield
+        finally:
+            del os.environ["TORCHINDUCTOR_CACHE_DIR"]
+
+
 def main(argv: list[str] | None = None) -> int:
+    with _scratch_for_torch():
+        return _main(argv)
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     from snakesim.agents import AgentError

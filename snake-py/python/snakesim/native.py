@@ -16,7 +16,14 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import _core, runconfig
-from snakesim.train import RunDirError, TrainingFailed, TrainingInterrupted, TrainResult, default_run_dir
+from snakesim.train import (
+    RunDirError,
+    TrainingFailed,
+    TrainingInterrupted,
+    TrainResult,
+    default_run_dir,
+    lock_run_dir,
+)
 
 
 class _Progress:
@@ -62,6 +69,12 @@ class _Progress:
             self.bar.update(progress["timesteps"] - self.bar.n)
             self.bar.set_postfix_str(self._postfix())
 
+    def on_note(self, message: str) -> None:
+        if self.bar is not None:
+            self.bar.write(f"note: {message}", file=sys.stderr)
+        else:
+            self.log(f"note: {message}")
+
     def on_evaluation(self, row: Mapping[str, Any]) -> None:
         self.last_evaluation = dict(row)
         if self.bar is not None:
@@ -81,7 +94,10 @@ class NativeTrainer:
     """One training session of a native run: a new run, or ``resume=True`` to continue a run
     directory. ``overrides`` are configuration keys over the defaults, or over the run's saved
     config.yaml when resuming (the Rust side refuses changes to what is learnt). ``on_evaluation``
-    is called with each evaluation row as it is written (an exception it raises stops training)."""
+    is called with each evaluation row as it is written (an exception it raises stops training).
+
+    The run directory is locked from here to the end of :meth:`run` (one writer per run directory): a
+    second trainer on it raises RunDirError at once, naming the process that writes it."""
 
     def __init__(
         self,
@@ -101,15 +117,23 @@ class NativeTrainer:
             if run_dir is None:
                 raise RunDirError("--resume needs --run-dir (the run to continue)")
             self.run_dir = Path(run_dir)
+            self.lock = lock_run_dir(self.run_dir, new_run=False)
             saved = self.run_dir / "config.yaml"
             if not saved.is_file():
+                self.lock.release()
                 raise RunDirError(f"cannot resume {self.run_dir}: no config.yaml there")
             self.config = runconfig.resolve(runconfig.merge(runconfig.load(saved), overrides))
-            found = _core_checkpoints(self.run_dir)
-            self.resume_from = found[-1] if found else None
+            try:
+                steps, path, _skipped = _core.resume_point(json.dumps(self.config), self.lock)
+            except ValueError as error:
+                self.lock.release()
+                raise RunDirError(str(error)) from None
+            # The skipped checkpoints are named when training starts (the observer's on_note).
+            self.resume_from: tuple[int, Path] | None = (steps, Path(path))
         else:
             self.config = runconfig.resolve(overrides)
             self.run_dir = Path(run_dir) if run_dir is not None else default_run_dir(self.config)
+            self.lock = lock_run_dir(self.run_dir, new_run=True)
             self.resume_from = None
 
     def run(self) -> TrainResult:
@@ -120,7 +144,7 @@ class NativeTrainer:
         started = time.perf_counter()
         try:
             result = _core.train(
-                json.dumps(self.config), str(self.run_dir), self.resume, json.dumps(versions), progress
+                json.dumps(self.config), self.lock, self.resume, json.dumps(versions), progress
             )
         except (ValueError, OSError) as error:
             # Setup problems (ValueError) and unwritable run directories (OSError): one line each.
@@ -129,6 +153,7 @@ class NativeTrainer:
             raise TrainingFailed(str(error)) from None
         finally:
             progress.close()
+            self.lock.release()
         if result["interrupted"]:
             raise TrainingInterrupted(result["timesteps"], Path(result["checkpoint"]))
         return TrainResult(
@@ -140,9 +165,3 @@ class NativeTrainer:
             last_evaluation=result["last_evaluation"],
             details=result,
         )
-
-
-def _core_checkpoints(run_dir: Path) -> list[tuple[int, Path]]:
-    from snakesim.agents import checkpoints
-
-    return checkpoints(run_dir, native=True)

@@ -38,10 +38,12 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 from snakesim import _core
 from snakesim.config import plain
+from snakesim.files import write_atomically
 
 #: Every key with its default, from Rust.
 DEFAULTS: dict[str, Any] = json.loads(_core.run_config_defaults())
@@ -141,8 +143,9 @@ def dump(config: Mapping[str, Any]) -> str:
 
 
 def save(config: Mapping[str, Any], path: str | os.PathLike) -> None:
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(dump(config))
+    """Writes config.yaml whole (readers of a run being trained never see half of it)."""
+    text = dump(config)
+    write_atomically(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def parse_set(items: list[str]) -> dict[str, Any]:

@@ -173,7 +173,7 @@ def search(
     from snakesim import sweep_summary, tune_runner
 
     client = tune_runner.connect(address, cpus_per_trial)
-    sweep.write_manifest(
+    with sweep.start_folder(
         out_path,
         sweep.new_manifest(
             "search",
@@ -186,53 +186,57 @@ def search(
             cpus_per_trial=cpus_per_trial,
             max_failures=max_failures,
         ),
-    )
-    print(f"search {out_path}: {trials} trials of {name} over {', '.join(parsed)} on {client}", flush=True)
-    import optuna
+    ):
+        print(
+            f"search {out_path}: {trials} trials of {name} over {', '.join(parsed)} on {client}", flush=True
+        )
+        import optuna
 
-    optuna.logging.set_verbosity(optuna.logging.WARNING)  # its "study created" line; the display says more
-    timesteps = resolved["timesteps"]
-    tune_config = tune.TuneConfig(
-        search_alg=OptunaSearch(metric=metric, mode="max", seed=resolved["seed"]),
-        scheduler=ASHAScheduler(
-            time_attr="timesteps",
-            metric=metric,
-            mode="max",
-            max_t=timesteps,
-            grace_period=max(1, int(timesteps * GRACE_SHARE)),
-            reduction_factor=ASHA_REDUCTION_FACTOR,
-        ),
-        num_samples=trials,
-    )
-    trials_dir = (out_path / sweep.TRIALS_DIR).resolve()
-    outcome = tune_runner.fit(
-        out_path,
-        tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir)),
-        _tune_space(parsed),
-        total=trials,
-        names=_numbered(),
-        cpus_per_trial=cpus_per_trial,
-        max_failures=max_failures,
-        progress=progress,
-        tune_config=tune_config,
-    )
-    done = _searched_trials(out_path, name, base, list(parsed))
-    rows = sweep_summary.summarize(out_path, done)
-    print(sweep_summary.format_table(rows))
-    print(f"wrote {sweep_summary.write_csv(out_path, rows)}")
-    for trial_name, error in outcome.errors.items():
-        print(f"snakesim search: trial {trial_name} failed: {error}", file=sys.stderr)
-    best = _best(out_path, done, metric)
-    if best is None:
-        print("snakesim search: no trial was evaluated; nothing to write", file=sys.stderr)
-        return 130 if outcome.interrupted else 1
-    trial, value = best
-    path = write_best(out_path, _overrides(user_base, trial.point), trial.name, metric, value)
-    print(
-        f"best: {trial.name} ({', '.join(f'{k}={v}' for k, v in trial.point.items())}): final {metric} "
-        f"{value:.4g}; wrote {path}; train it with: snakesim train --config {path}"
-    )
-    return 130 if outcome.interrupted else 0
+        optuna.logging.set_verbosity(
+            optuna.logging.WARNING
+        )  # its "study created" line; the display says more
+        timesteps = resolved["timesteps"]
+        tune_config = tune.TuneConfig(
+            search_alg=OptunaSearch(metric=metric, mode="max", seed=resolved["seed"]),
+            scheduler=ASHAScheduler(
+                time_attr="timesteps",
+                metric=metric,
+                mode="max",
+                max_t=timesteps,
+                grace_period=max(1, int(timesteps * GRACE_SHARE)),
+                reduction_factor=ASHA_REDUCTION_FACTOR,
+            ),
+            num_samples=trials,
+        )
+        trials_dir = (out_path / sweep.TRIALS_DIR).resolve()
+        outcome = tune_runner.fit(
+            out_path,
+            tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir)),
+            _tune_space(parsed),
+            total=trials,
+            names=_numbered(),
+            cpus_per_trial=cpus_per_trial,
+            max_failures=max_failures,
+            progress=progress,
+            tune_config=tune_config,
+        )
+        done = _searched_trials(out_path, name, base, list(parsed))
+        rows = sweep_summary.summarize(out_path, done)
+        print(sweep_summary.format_table(rows))
+        print(f"wrote {sweep_summary.write_csv(out_path, rows)}")
+        for trial_name, error in outcome.errors.items():
+            print(f"snakesim search: trial {trial_name} failed: {error}", file=sys.stderr)
+        best = _best(out_path, done, metric)
+        if best is None:
+            print("snakesim search: no trial was evaluated; nothing to write", file=sys.stderr)
+            return 130 if outcome.interrupted else 1
+        trial, value = best
+        path = write_best(out_path, _overrides(user_base, trial.point), trial.name, metric, value)
+        print(
+            f"best: {trial.name} ({', '.join(f'{k}={v}' for k, v in trial.point.items())}): final {metric} "
+            f"{value:.4g}; wrote {path}; train it with: snakesim train --config {path}"
+        )
+        return 130 if outcome.interrupted else 0
 
 
 def _numbered():

@@ -27,7 +27,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim import runconfig
+from snakesim import _core, runconfig
 from snakesim.config import LIMITS
 from snakesim.files import write_atomically
 
@@ -48,6 +48,9 @@ DEFAULT_MAX_FAILURES = 2
 DEFAULT_CPUS_PER_TRIAL = 1
 #: Seconds to reach a cluster given by --address before giving up with an error.
 CONNECT_TIMEOUT_S = 30.0
+#: Seconds a retried trial waits for the run directory's earlier writer (a worker Ray gave up on that
+#: is still ending) before it fails, leaving the folder to that writer.
+TRIAL_LOCK_WAIT_S = 60.0
 #: Longest trial folder name (before a number that keeps names apart).
 _MAX_NAME = 100
 
@@ -227,11 +230,30 @@ def check_new_out(out: str | os.PathLike) -> Path:
             )
         if not out.is_dir():
             raise SweepError(f"--out {out} exists and is not a folder")
-        if any(out.iterdir()):
+        if any(p.name != _core.LOCK_FILE for p in out.iterdir()):
             raise SweepError(f"--out {out} exists, is not empty and is not a sweep; choose another --out")
     elif not out.parent.is_dir():
         raise SweepError(f"--out {out}: folder {out.parent} does not exist")
     return out
+
+
+def lock_folder(out: Path, wait_seconds: float = 0.0, what: str = "folder"):
+    """The writer lock of a sweep's (or a search's) folder, or a trial's run directory, held until
+    released: one writer per folder. SweepError naming the process that writes it when another one
+    does."""
+    try:
+        return _core.lock_folder(os.fspath(out), what, wait_seconds)
+    except ValueError as error:
+        raise SweepError(str(error)) from None
+
+
+def start_folder(out: Path, manifest: Mapping[str, Any]):
+    """Creates a new sweep's (or search's) folder, locks it and writes its plan; returns the lock."""
+    out.mkdir(exist_ok=True)
+    lock = lock_folder(out)
+    check_new_out(out)  # again, under the lock: another sweep may have started there meanwhile
+    write_manifest(out, manifest)
+    return lock
 
 
 def write_manifest(out: Path, manifest: Mapping[str, Any]) -> None:
@@ -363,9 +385,9 @@ def run_sweep(
 
     # Before writing anything: an unreachable or too small cluster leaves no folder behind.
     client = tune_runner.connect(address, cpus_per_trial)
-    write_manifest(out_path, manifest)
-    print(f"sweep {out_path}: {len(trials)} trials on {client}", flush=True)
-    return _run(out_path, trials, trials, cpus_per_trial, max_failures, progress)
+    with start_folder(out_path, manifest):
+        print(f"sweep {out_path}: {len(trials)} trials on {client}", flush=True)
+        return _run(out_path, trials, trials, cpus_per_trial, max_failures, progress)
 
 
 def resume_sweep(
@@ -378,6 +400,18 @@ def resume_sweep(
 ) -> int:
     """``snakesim sweep --resume``: runs the trials of a sweep that have not finished."""
     manifest = read_manifest(folder)
+    with lock_folder(Path(folder)):
+        return _resume(folder, manifest, address, cpus_per_trial, max_failures, progress)
+
+
+def _resume(
+    folder: str | os.PathLike,
+    manifest: Mapping[str, Any],
+    address: str | None,
+    cpus_per_trial: int | None,
+    max_failures: int | None,
+    progress: bool | None,
+) -> int:
     if manifest["kind"] != "sweep":
         raise SweepError(f"{folder} is a {manifest['kind']}, not a sweep; --resume continues sweeps only")
     cpus = manifest["cpus_per_trial"] if cpus_per_trial is None else cpus_per_trial

@@ -8,6 +8,10 @@ A run lives in one directory::
     tb/PPO_1/            TensorBoard logs (SB3's, plus eval/*)
     checkpoints/         model_<T>_steps.zip (+ vecnormalize_<T>_steps.pkl, model_<T>_steps.json)
     model.zip            the final model (also written on Ctrl-C), vecnormalize.pkl with normalize: true
+    writer.lock          who writes the run now: one writer per run directory (snakesim._core.lock_run_dir)
+
+Every file is written whole, through a temporary file renamed into place, or appended a row at a time,
+so readers (evaluate, plot, replay) need no lock and never see half a file.
 
 Evaluations run every ``eval_freq`` total timesteps and once at the end, on ``eval_episodes``
 deterministic episodes in a separate batched env seeded with ``eval_seed``: every evaluation sees the
@@ -74,6 +78,18 @@ class TrainResult:
     def training_timesteps_per_second(self) -> float:
         busy = self.seconds - self.eval_seconds
         return (self.timesteps - self.start_timesteps) / busy if busy > 0 else 0.0
+
+
+def lock_run_dir(run_dir: Path, *, new_run: bool):
+    """The run directory's writer lock (``snakesim._core.WriterLock``), held until released: a new run's
+    folder must be absent or empty (it is created), a resumed run's must exist; RunDirError naming the
+    process that writes it when another one does."""
+    from snakesim import _core
+
+    try:
+        return _core.lock_run_dir(os.fspath(run_dir), new_run)
+    except ValueError as error:
+        raise RunDirError(str(error)) from None
 
 
 def package_versions() -> dict[str, str]:
@@ -233,43 +249,62 @@ class Trainer:
             if run_dir is None:
                 raise RunDirError("--resume needs --run-dir (the run to continue)")
             self.run_dir = Path(run_dir)
-            config_path = self.run_dir / agents.CONFIG_FILE
-            if not config_path.is_file():
-                raise RunDirError(f"cannot resume {self.run_dir}: no {agents.CONFIG_FILE} there")
-            saved = runconfig.load(config_path)
-            config = runconfig.resolve(runconfig.merge(saved, overrides))
-            for key in runconfig.IDENTITY_KEYS:
-                if config[key] != saved[key]:
-                    raise RunDirError(
-                        f"cannot change {key} when resuming "
-                        f"({self.run_dir} has {saved[key]!r}, got {config[key]!r})"
-                    )
-            found = agents.checkpoints(self.run_dir)
-            if not found:
-                raise RunDirError(f"cannot resume {self.run_dir}: it has no checkpoints")
-            self.resume_from = found[-1]
-            if self.resume_from[0] >= config["timesteps"]:
-                raise RunDirError(
-                    f"{self.run_dir} already has {self.resume_from[0]} timesteps (>= timesteps "
-                    f"{config['timesteps']}); pass a larger --timesteps to train on"
-                )
-            meta = self.resume_from[1].with_suffix(".json")
-            if meta.is_file():
-                try:
-                    self.wall_offset = float(json.loads(meta.read_text())["wall_time"])
-                except (ValueError, TypeError, KeyError, OSError) as error:
-                    raise RunDirError(
-                        f"cannot resume {self.run_dir}: {meta} is corrupt ({type(error).__name__}: {error})"
-                    ) from None
+            self.lock = lock_run_dir(self.run_dir, new_run=False)
+            try:
+                config = self._resume_config(overrides)
+            except BaseException:
+                self.lock.release()
+                raise
         else:
             config = runconfig.resolve(overrides)
             self.run_dir = Path(run_dir) if run_dir is not None else default_run_dir(config)
-            if self.run_dir.exists() and (not self.run_dir.is_dir() or any(self.run_dir.iterdir())):
-                raise RunDirError(
-                    f"run directory {self.run_dir} already exists and is not empty: "
-                    "pass --resume to continue it, or choose another --run-dir"
-                )
+            self.lock = lock_run_dir(self.run_dir, new_run=True)
         self.config = config
+
+    def _resume_config(self, overrides: Mapping[str, Any]) -> dict[str, Any]:
+        """The saved configuration with ``overrides``; picks the newest checkpoint that is whole (its
+        zip readable, its note parsed), naming each newer one it skips."""
+        config_path = self.run_dir / agents.CONFIG_FILE
+        if not config_path.is_file():
+            raise RunDirError(f"cannot resume {self.run_dir}: no {agents.CONFIG_FILE} there")
+        saved = runconfig.load(config_path)
+        config = runconfig.resolve(runconfig.merge(saved, overrides))
+        for key in runconfig.IDENTITY_KEYS:
+            if config[key] != saved[key]:
+                raise RunDirError(
+                    f"cannot change {key} when resuming "
+                    f"({self.run_dir} has {saved[key]!r}, got {config[key]!r})"
+                )
+        found = agents.checkpoints(self.run_dir)
+        if not found:
+            raise RunDirError(f"cannot resume {self.run_dir}: it has no checkpoints")
+        skipped = []
+        for steps, path in reversed(found):
+            try:
+                agents.inspect_model(path)
+                meta = path.with_suffix(".json")
+                wall = float(json.loads(meta.read_text())["wall_time"]) if meta.is_file() else 0.0
+                if not math.isfinite(wall) or wall < 0:
+                    raise ValueError(f"{meta}: wall_time {wall} is not a time")
+            except (agents.AgentError, ValueError, TypeError, KeyError, OSError) as error:
+                why = (
+                    str(error) if isinstance(error, agents.AgentError) else f"{type(error).__name__}: {error}"
+                )
+                skipped.append(f"skipped checkpoint {path}: {why}")
+                continue
+            if steps >= config["timesteps"]:
+                raise RunDirError(
+                    f"{self.run_dir} already has {steps} timesteps (>= timesteps "
+                    f"{config['timesteps']}); pass a larger --timesteps to train on"
+                )
+            for line in skipped:
+                self.log(f"note: {line}")
+            self.resume_from = (steps, path)
+            self.wall_offset = wall
+            return config
+        raise RunDirError(
+            f"cannot resume {self.run_dir}: none of its checkpoints loads ({'; '.join(skipped)})"
+        )
 
     # -- files -------------------------------------------------------------------------------------
     def _prepare_dir(self) -> None:
@@ -287,7 +322,9 @@ class Trainer:
                     )
                     self.log(f"note: resuming with other versions than the run started with: {current}")
                 versions = recorded
-            versions_path.write_text(json.dumps(versions, indent=2) + "\n")
+            write_atomically(
+                versions_path, lambda tmp: Path(tmp).write_text(json.dumps(versions, indent=2) + "\n")
+            )
             self._prepare_evaluations()
         except OSError as error:
             raise RunDirError(
@@ -393,20 +430,24 @@ class Trainer:
 
     def save_checkpoint(self, timesteps: int, reason: str = "periodic") -> Path:
         model_path, stats_path = agents.checkpoint_paths(self.run_dir, timesteps)
-        self.model.save(model_path)
+        self._save_model(model_path, stats_path)
+        meta = {"timesteps": timesteps, "wall_time": self.wall_time(), "reason": reason}
+        write_atomically(
+            model_path.with_suffix(".json"), lambda tmp: Path(tmp).write_text(json.dumps(meta) + "\n")
+        )
+        return model_path
+
+    def _save_model(self, model_path: Path, stats_path: Path) -> None:
+        """The model zip and, with ``normalize``, its statistics, each written whole (readers may be
+        loading them while we train)."""
+        write_atomically(model_path, self.model.save)
         normalizer = self.model.get_vec_normalize_env()
         if normalizer is not None:
-            normalizer.save(os.fspath(stats_path))
-        meta = {"timesteps": timesteps, "wall_time": self.wall_time(), "reason": reason}
-        model_path.with_suffix(".json").write_text(json.dumps(meta) + "\n")
-        return model_path
+            write_atomically(stats_path, normalizer.save)
 
     def _save_final(self) -> Path:
         path = self.run_dir / agents.MODEL_FILE
-        self.model.save(path)
-        normalizer = self.model.get_vec_normalize_env()
-        if normalizer is not None:
-            normalizer.save(os.fspath(self.run_dir / agents.VECNORMALIZE_FILE))
+        self._save_model(path, self.run_dir / agents.VECNORMALIZE_FILE)
         return path
 
     def evaluate(self, timesteps: int) -> dict[str, Any]:
@@ -446,6 +487,13 @@ class Trainer:
 
     # -- the session -------------------------------------------------------------------------------
     def run(self) -> TrainResult:
+        """Trains to the configured timesteps; the run directory's lock is let go when it returns."""
+        try:
+            return self._run()
+        finally:
+            self.lock.release()
+
+    def _run(self) -> TrainResult:
         import torch
         from stable_baselines3.common.callbacks import CallbackList
 

@@ -29,7 +29,16 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim.sweep import CONNECT_TIMEOUT_S, TUNE_DIR, SweepError, Trial, next_session, trial_finished
+from snakesim.sweep import (
+    CONNECT_TIMEOUT_S,
+    TRIAL_LOCK_WAIT_S,
+    TUNE_DIR,
+    SweepError,
+    Trial,
+    lock_folder,
+    next_session,
+    trial_finished,
+)
 
 #: Each training session of a trial, one JSON line, in its run directory.
 SESSIONS_FILE = "sessions.jsonl"
@@ -96,6 +105,25 @@ def _token_auth_if_available() -> None:
     maybe_enable_token_auth_if_token_available(warn_if_disabled=False)
 
 
+def _local_ray_scratch() -> str:
+    """A folder for the local Ray's session files (logs, sockets, object spills), removed when this
+    process ends: Ray's own default, /tmp/ray, keeps every session's files forever."""
+    import atexit
+
+    import ray
+
+    scratch = tempfile.mkdtemp(prefix="snakesim-ray-")
+
+    def remove() -> None:
+        # Ray's own exit hook (registered later, so run earlier) has stopped it already; stopping twice
+        # is harmless, and Ray must be down before its files go.
+        ray.shutdown()
+        shutil.rmtree(scratch, ignore_errors=True)
+
+    atexit.register(remove)
+    return scratch
+
+
 def connect(address: str | None, cpus_per_trial: int = 1, timeout: float = CONNECT_TIMEOUT_S) -> str:
     """Connects this process to Ray: the cluster at ``address`` (HOST:PORT), or a local Ray started
     for the sweep; checks that it has ``cpus_per_trial`` CPUs. Returns a description; SweepError
@@ -105,7 +133,7 @@ def connect(address: str | None, cpus_per_trial: int = 1, timeout: float = CONNE
     if ray.is_initialized():
         ray.shutdown()
     if address is None:
-        _quiet_ray_init()
+        _quiet_ray_init(_temp_dir=_local_ray_scratch())
         _check_cpus(cpus_per_trial)
         return f"a local Ray ({_cpus()} CPUs)"
     host, port = _host_port(address)
@@ -221,6 +249,11 @@ def train_trial(param: Mapping[str, Any]) -> None:
     run_dir = Path(spec["run_dir"])
     config = runconfig.resolve(spec["overrides"])
     native = config["trainer"] == "native"
+    if run_dir.is_dir():
+        # A retry, or a resumed sweep: the earlier attempt's worker may still be ending (Ray gave up on
+        # it, it did not die). Wait for it to let go of the folder; never write beside it. (The
+        # trainer takes the lock again for itself below.)
+        lock_folder(run_dir, TRIAL_LOCK_WAIT_S, "run directory").release()
     if trial_finished(run_dir):
         # Trained to the end by an earlier attempt that died before Tune heard of it.
         from snakesim.train import EVALUATIONS_FILE, read_evaluations
