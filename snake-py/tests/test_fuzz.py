@@ -1,15 +1,17 @@
 """Property tests (hypothesis) over the env's constructor, reset options and actions: whatever a user
 passes, the env returns finite observations and rewards or raises a ValueError, TypeError or (physics
-that blew up) RuntimeError; nothing else, never a crash or a hang."""
+that blew up) RuntimeError; nothing else, never a crash or a hang. And over model files: an edited
+model loads as an agent that acts finitely, or is refused in one line naming the file."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
-from snakesim import SnakeEnv
+from snakesim import SnakeEnv, agents
 from snakesim.config import ENV_KEYWORDS
 
 # Examples per property: each builds a world and steps it a few times (~5 ms).
@@ -133,3 +135,40 @@ def test_env_is_finite_or_a_typed_error(kwargs, options, seed, data):
         assert obs.shape == env.observation_space.shape and obs.dtype == np.float32
         if terminated or truncated:
             break
+
+
+# -- model files: whatever bytes a user points `snakesim evaluate` at ---------------------------------
+MODEL = (Path(__file__).resolve().parents[2] / "models" / "goal-5.safetensors").read_bytes()
+
+
+def _edit(data: bytes, edits: list[tuple[int, int, bytes]]) -> bytes:
+    """Each edit (position, bytes to drop, bytes to put there) applied in turn."""
+    out = bytearray(data)
+    for at, drop, put in edits:
+        at %= len(out) + 1
+        out[at : at + drop] = put
+    return bytes(out)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    edits=st.lists(
+        st.tuples(st.integers(0, 1 << 20), st.integers(0, 64), st.binary(max_size=16)), max_size=6
+    ),
+    name=st.sampled_from(["model.safetensors", "model.zip", "model.pt", "model"]),
+)
+def test_a_model_file_is_an_agent_or_one_line(tmp_path_factory, edits, name):
+    """The shipped model, edited: `load_agent` gives an agent or an AgentError of one line that names
+    the file, nothing else (a non-finite weight, a lying header, a truncated tensor...)."""
+    path = tmp_path_factory.mktemp("model") / name
+    path.write_bytes(_edit(MODEL, edits))
+    try:
+        agent = agents.load_agent(path)
+    except agents.AgentError as error:
+        message = str(error)
+        event("refused")
+        assert "\n" not in message and str(path) in message, message
+        return
+    event("loaded")
+    obs = np.zeros((1, agent.policy.obs_dim), np.float32)
+    assert np.isfinite(agent.act(obs)).all()

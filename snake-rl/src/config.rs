@@ -31,7 +31,7 @@ use crate::nn::Arch;
 pub struct ConfigError(pub String);
 
 fn err(message: impl Into<String>) -> ConfigError {
-    ConfigError(message.into())
+    ConfigError(crate::one_line(message.into()))
 }
 
 /// Limits of a run's sizes: each keeps a typo from asking for an impossible run.

@@ -269,8 +269,12 @@ struct Parsed<'a> {
 
 impl<'a> Parsed<'a> {
     fn new(path: &'a Path, bytes: &'a [u8]) -> Result<Self, ModelError> {
-        let bad =
-            |why: String| ModelError(format!("{} is not a snakesim model: {why}", path.display()));
+        let bad = |why: String| {
+            ModelError(crate::one_line(format!(
+                "{} is not a snakesim model: {why}",
+                path.display()
+            )))
+        };
         let (_, metadata) = SafeTensors::read_metadata(bytes)
             .map_err(|e| bad(format!("corrupt or truncated safetensors file ({e})")))?;
         let tensors = SafeTensors::deserialize(bytes)
@@ -295,7 +299,7 @@ impl<'a> Parsed<'a> {
     }
 
     fn error(&self, why: impl std::fmt::Display) -> ModelError {
-        ModelError(format!("{}: {why}", self.path.display()))
+        ModelError(crate::one_line(format!("{}: {why}", self.path.display())))
     }
 
     fn meta(&self, key: &str) -> Result<&str, ModelError> {
@@ -447,14 +451,24 @@ fn read(path: &Path) -> Result<Vec<u8>, ModelError> {
 
 /// Reads a policy file (or the policy of a checkpoint).
 pub fn load_policy(path: &Path) -> Result<SavedPolicy, ModelError> {
-    let bytes = read(path)?;
-    Parsed::new(path, &bytes)?.policy()
+    parse_policy(path, &read(path)?)
 }
 
 /// Reads a checkpoint.
 pub fn load_checkpoint(path: &Path) -> Result<Checkpoint, ModelError> {
-    let bytes = read(path)?;
-    let p = Parsed::new(path, &bytes)?;
+    parse_checkpoint(path, &read(path)?)
+}
+
+/// A policy from a file's bytes (`path` names it in messages): what [`load_policy`] does once the
+/// file is read. Any bytes give a policy or a one-line error, never a panic (fuzzed:
+/// fuzz/fuzz_targets/model_file.rs).
+pub fn parse_policy(path: &Path, bytes: &[u8]) -> Result<SavedPolicy, ModelError> {
+    Parsed::new(path, bytes)?.policy()
+}
+
+/// A checkpoint from a file's bytes, as [`parse_policy`].
+pub fn parse_checkpoint(path: &Path, bytes: &[u8]) -> Result<Checkpoint, ModelError> {
+    let p = Parsed::new(path, bytes)?;
     let policy = p.policy()?;
     let n = policy.net.len();
     let mut adam = Adam::new(n);

@@ -297,11 +297,11 @@ pub fn prepare(
                 });
             }
             Ok(checkpoint) => skipped.push(format!(
-                "skipped checkpoint {}: it holds {} timesteps, not the {steps} its name says",
+                "skipped a checkpoint: {} holds {} timesteps, not the {steps} its name says",
                 path.display(),
                 checkpoint.policy.timesteps
             )),
-            Err(e) => skipped.push(format!("skipped checkpoint {}: {e}", path.display())),
+            Err(e) => skipped.push(format!("skipped a checkpoint: {e}")),
         }
     }
     Err(TrainError::Setup(format!(

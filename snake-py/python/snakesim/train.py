@@ -280,17 +280,18 @@ class Trainer:
             raise RunDirError(f"cannot resume {self.run_dir}: it has no checkpoints")
         skipped = []
         for steps, path in reversed(found):
+            meta = path.with_suffix(".json")
             try:
                 agents.inspect_model(path)
-                meta = path.with_suffix(".json")
+            except agents.AgentError as error:
+                skipped.append(f"skipped a checkpoint: {error}")
+                continue
+            try:
                 wall = float(json.loads(meta.read_text())["wall_time"]) if meta.is_file() else 0.0
                 if not math.isfinite(wall) or wall < 0:
-                    raise ValueError(f"{meta}: wall_time {wall} is not a time")
-            except (agents.AgentError, ValueError, TypeError, KeyError, OSError) as error:
-                why = (
-                    str(error) if isinstance(error, agents.AgentError) else f"{type(error).__name__}: {error}"
-                )
-                skipped.append(f"skipped checkpoint {path}: {why}")
+                    raise ValueError(f"wall_time {wall} is not a time")
+            except (ValueError, TypeError, KeyError, OSError) as error:
+                skipped.append(f"skipped a checkpoint: {meta} is corrupt ({type(error).__name__}: {error})")
                 continue
             if steps >= config["timesteps"]:
                 raise RunDirError(

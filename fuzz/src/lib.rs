@@ -1,0 +1,2 @@
+//! The checks the fuzz targets run (shared with the workspace's tests/parsers.rs).
+pub mod checks;

@@ -1,0 +1,138 @@
+//! Every parser of a file a user hands snakesim, under property tests (proptest) in CI: real files
+//! (the shipped models, the shipped run configs, the fuzz seeds) mutated byte by byte, truncated and
+//! spliced must give a value or a one-line error, never a panic; and every input the fuzzer ever
+//! crashed on (fuzz/regressions/<target>/) stays fixed. The checks are the fuzz targets' own
+//! (fuzz/src/checks.rs); `bash scripts/fuzz` runs the coverage-guided fuzzer on them.
+
+use std::path::{Path, PathBuf};
+
+use proptest::prelude::*;
+
+#[path = "../fuzz/src/checks.rs"]
+mod checks;
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+
+fn files(folder: &str, extension: Option<&str>) -> Vec<PathBuf> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir(Path::new(ROOT).join(folder))
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.is_file()
+                && !p
+                    .file_name()
+                    .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+        })
+        .filter(|p| extension.is_none_or(|x| p.extension().is_some_and(|e| e == x)))
+        .collect();
+    found.sort();
+    found
+}
+
+/// The real inputs of each target: what users and the fuzzer start from.
+fn seeds(target: &str) -> Vec<Vec<u8>> {
+    let mut paths = files(&format!("fuzz/seeds/{target}"), None);
+    match target {
+        "model_file" => paths.extend(files("models", Some("safetensors"))),
+        "run_config" => paths.extend(files("snake-py/configs", Some("yaml"))),
+        _ => {}
+    }
+    assert!(!paths.is_empty(), "no seeds for {target}");
+    paths.iter().map(|p| std::fs::read(p).unwrap()).collect()
+}
+
+fn check(target: &str, bytes: &[u8]) {
+    match target {
+        "model_file" => checks::model_file(bytes),
+        "run_config" => checks::run_config(bytes),
+        "env_keywords" => checks::env_keywords(bytes),
+        _ => unreachable!("{target}"),
+    }
+}
+
+const TARGETS: [&str; 3] = ["model_file", "run_config", "env_keywords"];
+
+#[test]
+fn the_seeds_parse() {
+    for bytes in seeds("model_file") {
+        snake_rl::model::parse_policy(Path::new("seed"), &bytes).expect("a shipped model loads");
+    }
+    for bytes in seeds("run_config") {
+        let text = std::str::from_utf8(&bytes).unwrap();
+        let layer = snake_rl::config::parse_yaml(text).expect("a shipped config parses");
+        snake_rl::config::RunConfig::from_layers(&[layer]).expect("a shipped config is valid");
+    }
+    for bytes in seeds("env_keywords") {
+        let serde_json::Value::Object(k) = serde_json::from_slice(&bytes).unwrap() else {
+            panic!("a seed that is not a mapping");
+        };
+        snake_rl::config::env_from_keywords(&k).expect("a seed is valid");
+    }
+}
+
+#[test]
+fn every_input_the_fuzzer_crashed_on_stays_fixed() {
+    for target in TARGETS {
+        for path in files(&format!("fuzz/regressions/{target}"), None) {
+            check(target, &std::fs::read(&path).unwrap());
+        }
+    }
+}
+
+/// An edit of a real file: flip bytes, cut it short, or splice in bytes at a place.
+#[derive(Debug, Clone)]
+enum Edit {
+    Set(usize, u8),
+    Truncate(usize),
+    Insert(usize, Vec<u8>),
+}
+
+fn edits() -> impl Strategy<Value = Vec<Edit>> {
+    let edit = prop_oneof![
+        4 => (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Set(i, b)),
+        1 => any::<usize>().prop_map(Edit::Truncate),
+        2 => (any::<usize>(), prop::collection::vec(any::<u8>(), 1..16))
+            .prop_map(|(i, b)| Edit::Insert(i, b)),
+    ];
+    prop::collection::vec(edit, 1..8)
+}
+
+fn apply(mut bytes: Vec<u8>, edits: &[Edit]) -> Vec<u8> {
+    for edit in edits {
+        let n = bytes.len().max(1);
+        match edit {
+            Edit::Set(i, b) if !bytes.is_empty() => bytes[i % n] = *b,
+            Edit::Set(..) => {}
+            Edit::Truncate(i) => bytes.truncate(i % n),
+            Edit::Insert(i, b) => {
+                let at = i % (bytes.len() + 1);
+                bytes.splice(at..at, b.iter().copied());
+            }
+        }
+    }
+    bytes
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+    #[test]
+    fn an_edited_model_file_is_a_model_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("model_file");
+        checks::model_file(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+
+    #[test]
+    fn an_edited_run_config_is_a_config_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("run_config");
+        checks::run_config(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+
+    #[test]
+    fn edited_env_keywords_are_a_config_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("env_keywords");
+        checks::env_keywords(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+}
