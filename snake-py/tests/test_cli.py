@@ -248,7 +248,11 @@ def bad_inputs(tmp_path, small_run):
     unknown_key.write_text("joints: 5\nlearning_rate: 0.1\n")
     return {
         "missing run dir": (["evaluate", tmp_path / "nope"], 1, "does not exist"),
-        "not a model": (["evaluate", a_file], 1, "is not a Stable-Baselines3 model zip"),
+        "not a model": (
+            ["evaluate", a_file],
+            1,
+            "is neither a snakesim model (safetensors) nor a Stable-Baselines3 model (zip)",
+        ),
         "wrong joints": (["evaluate", small_run, "--joints", 5], 1, "trained with joints 3, not 5"),
         "unknown arch": (["train", "--arch", "huge"], 2, "invalid choice: 'huge'"),
         "unknown option": (["train", "--bogus"], 2, "unrecognized arguments: --bogus"),
@@ -269,7 +273,11 @@ def bad_inputs(tmp_path, small_run):
             1,
             "cannot write to run directory",
         ),
-        "resume nothing": (["train", "--run-dir", tmp_path / "empty", "--resume"], 1, "no config.yaml"),
+        "resume nothing": (
+            ["train", "--run-dir", tmp_path / "empty", "--resume"],
+            1,
+            f"cannot resume {tmp_path / 'empty'}: no such directory",
+        ),
         "unwritable plot": (["plot", small_run, "--out", a_file / "fig.png"], 1, "does not exist"),
         "plot format": (
             ["plot", small_run, "--out", tmp_path / "fig.jpg"],

@@ -15,7 +15,10 @@ def stub_names():
     for node in tree.body:
         if isinstance(node, ast.ClassDef):
             names[node.name] = {
-                n.name for n in node.body if isinstance(n, ast.FunctionDef) and n.name != "__init__"
+                # Private names and dunders (__init__, __enter__, ...) are skipped, as module_names does.
+                n.name
+                for n in node.body
+                if isinstance(n, ast.FunctionDef) and not n.name.startswith("_")
             }
         elif isinstance(node, ast.AnnAssign):
             names[node.target.id] = None

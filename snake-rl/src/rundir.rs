@@ -67,6 +67,15 @@ fn not_empty(path: &Path) -> RunDirError {
     ))
 }
 
+/// A new run's folder holds nothing yet but its lock file.
+pub(crate) fn check_empty(path: &Path) -> Result<(), RunDirError> {
+    if is_empty_but_lock(path) {
+        Ok(())
+    } else {
+        Err(not_empty(path))
+    }
+}
+
 /// Takes the run directory's writer lock ([`crate::lock`]) before anything in it is read or written,
 /// and holds it for as long as the returned lock lives. A new run's folder must be absent or empty
 /// (it is created); a resumed run's must exist. A folder another process is writing is refused at
@@ -95,9 +104,9 @@ pub fn lock_run_dir(path: &Path, new_run: bool) -> Result<WriterLock, RunDirErro
         )));
     }
     let lock = WriterLock::acquire(path, WHAT).map_err(held)?;
-    if new_run && !is_empty_but_lock(path) {
-        // Another run started and ended there between the check above and the lock.
-        return Err(not_empty(path));
+    if new_run {
+        // Another run may have started and ended there between the check above and the lock.
+        check_empty(path)?;
     }
     Ok(lock)
 }
@@ -134,9 +143,7 @@ impl RunDir {
         versions: &Map<String, Value>,
     ) -> Result<Self, RunDirError> {
         let path = lock.folder();
-        if !is_empty_but_lock(path) {
-            return Err(not_empty(path));
-        }
+        check_empty(path)?;
         std::fs::create_dir_all(path.join(CHECKPOINT_DIR)).map_err(|e| io(path, e))?;
         let dir = RunDir {
             path: path.to_path_buf(),

@@ -22,13 +22,13 @@ use snake_core::{EnvConfig, VecSnakeEnv};
 use crate::buffer::RolloutBuffer;
 use crate::config::{RunConfig, TrainerKind};
 use crate::evaluate::{run_episodes, summarize, EvalError};
-use crate::lock::{is_empty_but_lock, WriterLock};
+use crate::lock::WriterLock;
 use crate::model::{self, Checkpoint, EnvSpec, SavedPolicy};
 use crate::nn::{init_params, ActorCritic, Workspace};
 use crate::normalize::Normalizer;
 use crate::policy::Policy;
 use crate::ppo::{act, Learner, LossScratch, LossSettings, UpdateSettings, UpdateStats};
-use crate::rundir::{lock_run_dir, EvaluationRow, RunDir, MODEL_FILE};
+use crate::rundir::{check_empty, lock_run_dir, EvaluationRow, RunDir, MODEL_FILE};
 use crate::tensorboard::EventWriter;
 
 /// Why training stopped with an error. Every message is one line.
@@ -247,13 +247,7 @@ pub fn prepare(
     check_native(config)?;
     let run_dir = lock.folder();
     if !resume {
-        if !is_empty_but_lock(run_dir) {
-            return Err(TrainError::Setup(format!(
-                "run directory {} already exists and is not empty: pass --resume to continue it, or \
-                 choose another --run-dir",
-                run_dir.display()
-            )));
-        }
+        check_empty(run_dir).map_err(|e| TrainError::Setup(e.0))?;
         return Ok(Prepared {
             config: config.resolved(),
             resume: None,

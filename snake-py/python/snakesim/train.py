@@ -32,7 +32,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim import agents, runconfig
+from snakesim import _core, agents, runconfig
 from snakesim.files import write_atomically
 
 EVAL_FIELDS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
@@ -84,8 +84,6 @@ def lock_run_dir(run_dir: Path, *, new_run: bool):
     """The run directory's writer lock (``snakesim._core.WriterLock``), held until released: a new run's
     folder must be absent or empty (it is created), a resumed run's must exist; RunDirError naming the
     process that writes it when another one does."""
-    from snakesim import _core
-
     try:
         return _core.lock_run_dir(os.fspath(run_dir), new_run)
     except ValueError as error:
