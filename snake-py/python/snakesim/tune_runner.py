@@ -105,6 +105,10 @@ def _token_auth_if_available() -> None:
     maybe_enable_token_auth_if_token_available(warn_if_disabled=False)
 
 
+#: Bytes Ray adds below its temp folder for its longest socket path (session_..._<pid>/sockets/plasma_store).
+RAY_SESSION_PATH_BYTES = 64
+
+
 def _local_ray_scratch() -> str:
     """A folder for the local Ray's session files (logs, sockets, object spills), removed when this
     process ends: Ray's own default, /tmp/ray, keeps every session's files forever."""
@@ -112,7 +116,12 @@ def _local_ray_scratch() -> str:
 
     import ray
 
-    scratch = tempfile.mkdtemp(prefix="snakesim-ray-")
+    # Ray puts sockets at <folder>/session_<date>_<time>_<pid>/sockets/plasma_store, and a socket's
+    # path may not exceed 107 bytes: a long TMPDIR falls back to /tmp, Ray's own default parent.
+    parent = tempfile.gettempdir()
+    if len(parent) + len("/snakesim-ray-12345678") + RAY_SESSION_PATH_BYTES > 107:
+        parent = "/tmp"
+    scratch = tempfile.mkdtemp(prefix="snakesim-ray-", dir=parent)
 
     def remove() -> None:
         # Ray's own exit hook (registered later, so run earlier) has stopped it already; stopping twice
