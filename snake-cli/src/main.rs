@@ -36,8 +36,9 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let command = Cli::command().mut_subcommand("train", train::with_default_help);
-    let cli = match Cli::from_arg_matches(&command.get_matches()) {
+    let command = Cli::command().mut_subcommand("train", train::with_flags);
+    let matches = command.get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
         Err(e) => e.exit(),
     };
@@ -45,7 +46,12 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(&args).map(|()| ExitCode::SUCCESS),
         Command::Env(args) => env_run::run(&args).map(|()| ExitCode::SUCCESS),
         Command::Bench(args) => bench::bench(&args).map(|()| ExitCode::SUCCESS),
-        Command::Train(args) => train::run(&args),
+        Command::Train(args) => train::run(
+            &args,
+            matches
+                .subcommand_matches("train")
+                .expect("the train subcommand's matches"),
+        ),
     };
     match result {
         Ok(code) => code,

@@ -15,6 +15,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{Map, Value};
 use snake_rl::config::{self, RunConfig};
+use snake_rl::flags::{self, FlagValue, FLAGS};
 use snake_rl::rundir::EvaluationRow;
 use snake_rl::trainer::{self, Observer, Outcome, Progress, Session};
 
@@ -27,7 +28,7 @@ pub struct TrainArgs {
     /// Any configuration key, e.g. ppo.n_steps=256 or env.max_episode_steps=1000 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-    /// Where the run goes (default runs/native-ARCH-JOINTS-PRESET-seedSEED).
+    /// Where the run goes (default runs/ppo-ARCH-JOINTS-PRESET-seedSEED).
     #[arg(long)]
     pub run_dir: Option<PathBuf>,
     /// Continue the run in --run-dir from its latest checkpoint.
@@ -36,120 +37,45 @@ pub struct TrainArgs {
     /// No progress bar (default: a bar when stderr is a terminal).
     #[arg(long)]
     pub no_progress: bool,
-    /// Snake joints.
-    #[arg(long)]
-    pub joints: Option<u64>,
-    /// Network: small (pi/vf [64, 64]) or large (shared [128, 128] first).
-    #[arg(long)]
-    pub arch: Option<String>,
-    /// Robot preset: paper or snakebot-gym.
-    #[arg(long)]
-    pub preset: Option<String>,
-    /// Total timesteps.
-    #[arg(long)]
-    pub timesteps: Option<u64>,
-    /// Parallel envs.
-    #[arg(long)]
-    pub n_envs: Option<u64>,
-    /// Seed.
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// Evaluate every N timesteps (0: at the end only).
-    #[arg(long)]
-    pub eval_freq: Option<u64>,
-    /// Episodes per evaluation.
-    #[arg(long)]
-    pub eval_episodes: Option<u64>,
-    /// Seed of the evaluation episodes.
-    #[arg(long)]
-    pub eval_seed: Option<u64>,
-    /// Checkpoint every N timesteps (0: only the final one).
-    #[arg(long)]
-    pub checkpoint_freq: Option<u64>,
-    /// Normalise observations and rewards (SB3's VecNormalize).
-    #[arg(long)]
-    pub normalize: bool,
-    /// Threads for the envs and the updates.
-    #[arg(long)]
-    pub threads: Option<u64>,
+    // The run-configuration flags (--joints, --timesteps, ...) come from snake_rl::flags::FLAGS: see
+    // `with_flags`.
 }
 
-/// Help texts that quote the defaults of the one configuration type.
-pub fn with_default_help(cmd: clap::Command) -> clap::Command {
-    let d = RunConfig::default();
-    let help = [
-        ("joints", format!("Snake joints (default {})", d.joints)),
-        (
-            "arch",
-            format!(
-                "Network: small (pi/vf [64, 64]) or large (shared [128, 128] first) (default {})",
-                d.arch
-            ),
-        ),
-        (
-            "preset",
-            format!("Robot preset: paper or snakebot-gym (default {})", d.preset),
-        ),
-        (
-            "timesteps",
-            format!("Total timesteps (default {})", d.timesteps),
-        ),
-        ("n_envs", format!("Parallel envs (default {})", d.n_envs)),
-        ("seed", format!("Seed (default {})", d.seed)),
-        (
-            "eval_freq",
-            format!(
-                "Evaluate every N timesteps; 0: at the end only (default {})",
-                d.eval_freq
-            ),
-        ),
-        (
-            "eval_episodes",
-            format!("Episodes per evaluation (default {})", d.eval_episodes),
-        ),
-        (
-            "eval_seed",
-            format!(
-                "Seed of the evaluation episodes (default seed + {})",
-                config::EVAL_SEED_OFFSET
-            ),
-        ),
-        (
-            "checkpoint_freq",
-            format!(
-                "Checkpoint every N timesteps; 0: only the final one (default {})",
-                d.checkpoint_freq
-            ),
-        ),
-        (
-            "threads",
-            "Threads for the envs and the updates (default: one per core)".to_owned(),
-        ),
-    ];
-    help.into_iter()
-        .fold(cmd, |cmd, (name, text)| cmd.mut_arg(name, |a| a.help(text)))
+/// Adds the run configuration's flags, defined once in `snake_rl::flags::FLAGS` (those of the SB3
+/// trainer aside: it needs Python).
+pub fn with_flags(cmd: clap::Command) -> clap::Command {
+    FLAGS.iter().filter(|f| !f.sb3_only).fold(cmd, |cmd, f| {
+        let arg = clap::Arg::new(f.key)
+            .long(f.key.replace('_', "-"))
+            .help(f.help());
+        cmd.arg(match f.value {
+            FlagValue::Integer => arg
+                .value_name(f.key.to_uppercase())
+                .value_parser(flags::parse_integer),
+            FlagValue::Choice(names) => {
+                arg.value_parser(clap::builder::PossibleValuesParser::new(names()))
+            }
+            FlagValue::Switch => arg.action(clap::ArgAction::SetTrue),
+            FlagValue::Text => arg.value_name(f.key.to_uppercase()),
+        })
+    })
 }
 
-/// The configuration layers of the command line, as one JSON mapping.
-fn flag_layer(args: &TrainArgs) -> Value {
+/// The flags given on the command line, as one configuration layer.
+fn flag_layer(matches: &clap::ArgMatches) -> Value {
     let mut m = Map::new();
-    let mut put = |key: &str, v: Option<Value>| {
-        if let Some(v) = v {
-            m.insert(key.to_owned(), v);
+    for f in FLAGS.iter().filter(|f| !f.sb3_only) {
+        let value = match f.value {
+            FlagValue::Integer => matches.get_one::<u64>(f.key).map(|v| Value::from(*v)),
+            FlagValue::Switch => matches.get_flag(f.key).then_some(Value::Bool(true)),
+            FlagValue::Choice(_) | FlagValue::Text => matches
+                .get_one::<String>(f.key)
+                .map(|v| Value::from(v.as_str())),
+        };
+        if let Some(v) = value {
+            m.insert(f.key.to_owned(), v);
         }
-    };
-    put("joints", args.joints.map(Value::from));
-    put("arch", args.arch.clone().map(Value::from));
-    put("preset", args.preset.clone().map(Value::from));
-    put("timesteps", args.timesteps.map(Value::from));
-    put("n_envs", args.n_envs.map(Value::from));
-    put("seed", args.seed.map(Value::from));
-    put("eval_freq", args.eval_freq.map(Value::from));
-    put("eval_episodes", args.eval_episodes.map(Value::from));
-    put("eval_seed", args.eval_seed.map(Value::from));
-    put("checkpoint_freq", args.checkpoint_freq.map(Value::from));
-    put("normalize", args.normalize.then_some(Value::Bool(true)));
-    put("threads", args.threads.map(Value::from));
+    }
     Value::Object(m)
 }
 
@@ -219,8 +145,9 @@ impl Observer for Bar {
 /// Exit status after Ctrl-C (128 + SIGINT), as shells report it.
 const INTERRUPTED: u8 = 130;
 
-/// Runs `snake-cli train`: success, or 130 after Ctrl-C (the state was saved).
-pub fn run(args: &TrainArgs) -> Result<ExitCode> {
+/// Runs `snake-cli train` (`matches`: its own, for the configuration flags): success, or 130 after
+/// Ctrl-C (the state was saved).
+pub fn run(args: &TrainArgs, matches: &clap::ArgMatches) -> Result<ExitCode> {
     let mut layers = Vec::new();
     if let Some(path) = &args.config {
         let text = std::fs::read_to_string(path)
@@ -228,7 +155,7 @@ pub fn run(args: &TrainArgs) -> Result<ExitCode> {
         layers.push(config::parse_yaml(&text).with_context(|| path.display().to_string())?);
     }
     layers.push(config::parse_overrides(&args.set)?);
-    layers.push(flag_layer(args));
+    layers.push(flag_layer(matches));
     let (config, run_dir) = if args.resume {
         let run_dir = args
             .run_dir
@@ -242,12 +169,10 @@ pub fn run(args: &TrainArgs) -> Result<ExitCode> {
         (RunConfig::from_layers(&[base])?, run_dir)
     } else {
         let config = RunConfig::from_layers(&layers)?;
-        let run_dir = args.run_dir.clone().unwrap_or_else(|| {
-            PathBuf::from("runs").join(format!(
-                "native-{}-{}-{}-seed{}",
-                config.arch, config.joints, config.preset, config.seed
-            ))
-        });
+        let run_dir = args
+            .run_dir
+            .clone()
+            .unwrap_or_else(|| flags::default_run_dir(&config));
         (config, run_dir)
     };
     if config.trainer != config::TrainerKind::Native {

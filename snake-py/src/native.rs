@@ -343,6 +343,28 @@ impl Observer for PyObserver {
     }
 }
 
+/// run_config_flags() -> JSON list: the run configuration's command-line flags (key, flag, value kind,
+/// choices, help with the default, sb3_only), defined once in snake-rl (`snake_rl::flags::FLAGS`).
+#[pyfunction]
+fn run_config_flags() -> String {
+    let flags: Vec<Value> = snake_rl::flags::FLAGS
+        .iter()
+        .map(|f| f.describe())
+        .collect();
+    serde_json::to_string(&flags).expect("serialises")
+}
+
+/// default_run_dir(config_json) -> str: where a run goes without --run-dir
+/// (runs/ppo-ARCH-JOINTS-PRESET-seedSEED), for both trainers and both commands.
+#[pyfunction]
+fn default_run_dir(config_json: &str) -> PyResult<String> {
+    let config = RunConfig::from_layers(&[json_value(config_json, "the configuration")?])
+        .map_err(config_error)?;
+    Ok(snake_rl::flags::default_run_dir(&config)
+        .display()
+        .to_string())
+}
+
 /// env_throughput(env_json, n_envs, threads, seconds, seed) -> env steps/s of the batched env with
 /// uniform random actions, stepped as the native trainer steps it (no Python in the loop).
 #[pyfunction]
@@ -474,6 +496,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(train, m)?)?;
     m.add_function(wrap_pyfunction!(resume_point, m)?)?;
     m.add_function(wrap_pyfunction!(env_throughput, m)?)?;
+    m.add_function(wrap_pyfunction!(run_config_flags, m)?)?;
+    m.add_function(wrap_pyfunction!(default_run_dir, m)?)?;
     m.add_class::<NativePolicy>()?;
     m.add("IDENTITY_KEYS", snake_rl::config::IDENTITY_KEYS.to_vec())?;
     m.add(

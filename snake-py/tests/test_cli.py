@@ -5,9 +5,11 @@ test_native.py). Every run is a few thousand timesteps with small rollouts, so t
 import csv
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 import yaml
@@ -15,6 +17,8 @@ from PIL import Image
 from snakesim import cli, runconfig
 from snakesim.train import EVAL_FIELDS, Trainer, TrainingInterrupted
 from stable_baselines3.common.callbacks import BaseCallback
+
+REPO = Path(__file__).resolve().parents[2]
 
 # Rollouts of 4 envs x 128 steps, episodes of at most 200 steps, 2 evaluation episodes.
 TINY = {
@@ -379,3 +383,21 @@ def test_mp4_through_ffmpeg(small_run, tmp_path, capsys, monkeypatch):
     assert code == 0, err
     assert "(3 frames at 8 fps)" in stdout
     assert out.read_text() == f"{3 * 480 * 480 * 3} 480x480"
+
+
+def _long_flags(help_text: str) -> set[str]:
+    return set(re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*", help_text))
+
+
+def test_snakesim_train_offers_every_flag_of_snake_cli_train(capsys):
+    exe = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target")) / "release" / "snake-cli"
+    if not exe.is_file():
+        pytest.skip(f"{exe} is not built")
+    rust = subprocess.run([exe, "train", "--help"], capture_output=True, text=True, check=True).stdout
+    with pytest.raises(SystemExit):
+        cli.main(["train", "--help"])
+    python = capsys.readouterr().out
+    assert _long_flags(rust) - {"--help"} <= _long_flags(python)
+    # The same default run directory, from snake-rl, in both.
+    assert "runs/ppo-ARCH-JOINTS-PRESET-seedSEED" in rust
+    assert "runs/ppo-ARCH-JOINTS-" in python

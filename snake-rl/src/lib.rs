@@ -76,6 +76,7 @@ pub mod bench;
 pub mod buffer;
 pub mod config;
 pub mod evaluate;
+pub mod flags;
 pub mod lock;
 pub mod model;
 pub mod nn;

@@ -105,24 +105,6 @@ def check_writable(path: str | os.PathLike, what: str = "") -> Path:
 
 
 # -- train ----------------------------------------------------------------------------------------
-# Command-line flags that set configuration keys (argparse dest -> key).
-_TRAIN_FLAGS = (
-    "trainer",
-    "threads",
-    "joints",
-    "arch",
-    "preset",
-    "timesteps",
-    "n_envs",
-    "seed",
-    "eval_freq",
-    "eval_episodes",
-    "eval_seed",
-    "checkpoint_freq",
-    "normalize",
-    "device",
-    "torch_threads",
-)
 
 
 def _train_overrides(args: argparse.Namespace) -> dict[str, Any]:
@@ -135,9 +117,9 @@ def _train_overrides(args: argparse.Namespace) -> dict[str, Any]:
             raise runconfig.ConfigError(f"{args.config}: {error}") from None
         overrides = data
     overrides = runconfig.merge(overrides, runconfig.parse_set(args.set))
-    for key in _TRAIN_FLAGS:
-        if hasattr(args, key):
-            overrides[key] = getattr(args, key)
+    for flag in runconfig.FLAGS:
+        if hasattr(args, flag["key"]):
+            overrides[flag["key"]] = getattr(args, flag["key"])
     return overrides
 
 
@@ -442,85 +424,25 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)
     S = argparse.SUPPRESS
-    D = runconfig.DEFAULTS  # every default of a run, from snake-rl's RunConfig
 
     p = sub.add_parser(
         "train",
         help="train PPO (the paper's settings)",
-        description="Train SB3 PPO on snakesim. Configuration: defaults (the paper's Table 1) "
+        description="Train PPO on snakesim (the native trainer, or Stable-Baselines3 with --trainer sb3). "
+        "Configuration: defaults (the paper's Table 1) "
         "< --config YAML < --set KEY=VALUE and the flags below.",
     )
     p.add_argument("--config", metavar="FILE.yaml", help="a run configuration (see snake-py/configs/)")
-    p.add_argument(
-        "--trainer",
-        choices=runconfig.TRAINERS,
-        default=S,
-        help=f"native: snake-rl, the whole loop in Rust; sb3: Stable-Baselines3 (default {D['trainer']})",
-    )
-    p.add_argument(
-        "--threads",
-        type=_positive_int,
-        default=S,
-        help="native trainer: threads of the envs and the updates (default: one per core)",
-    )
-    p.add_argument("--joints", type=_positive_int, default=S, help=f"snake joints (default {D['joints']})")
-    p.add_argument(
-        "--arch",
-        choices=runconfig.ARCHS,
-        default=S,
-        help="small: pi/vf [64, 64]; large: shared [128, 128] first",
-    )
-    p.add_argument("--preset", choices=PRESETS, default=S, help=f"robot preset (default {D['preset']})")
-    p.add_argument(
-        "--timesteps", type=_positive_int, default=S, help=f"total timesteps (default {D['timesteps']})"
-    )
-    p.add_argument(
-        "--n-envs",
-        dest="n_envs",
-        type=_positive_int,
-        default=S,
-        help=f"parallel envs (default {D['n_envs']})",
-    )
-    p.add_argument("--seed", type=_seed, default=S, help=f"seed (default {D['seed']})")
-    p.add_argument(
-        "--eval-freq",
-        dest="eval_freq",
-        type=_count,
-        default=S,
-        help=f"evaluate every N timesteps (default {D['eval_freq']}; 0: at the end only)",
-    )
-    p.add_argument(
-        "--eval-episodes",
-        dest="eval_episodes",
-        type=_positive_int,
-        default=S,
-        help=f"episodes per evaluation (default {D['eval_episodes']})",
-    )
-    p.add_argument(
-        "--eval-seed",
-        dest="eval_seed",
-        type=_count,
-        default=S,
-        help=f"seed of the evaluation episodes (default seed + {runconfig.EVAL_SEED_OFFSET})",
-    )
-    p.add_argument(
-        "--checkpoint-freq",
-        dest="checkpoint_freq",
-        type=_count,
-        default=S,
-        help=f"checkpoint every N timesteps (default {D['checkpoint_freq']}; 0: only the final one)",
-    )
-    p.add_argument(
-        "--normalize", action="store_true", default=S, help="wrap the training env in VecNormalize"
-    )
-    p.add_argument("--device", default=S, help="auto, cpu, cuda or cuda:N (default auto)")
-    p.add_argument(
-        "--torch-threads",
-        dest="torch_threads",
-        type=_positive_int,
-        default=S,
-        help="torch CPU threads (default: torch's)",
-    )
+    for flag in runconfig.FLAGS:  # every run-configuration flag, defined once in snake-rl
+        kind = flag["value"]
+        options: dict[str, Any] = {"dest": flag["key"], "default": S, "help": flag["help"]}
+        if kind == "integer":
+            options["type"] = _count  # the configuration checks the range, naming the key
+        elif kind == "choice":
+            options["choices"] = flag["choices"]
+        elif kind == "switch":
+            options["action"] = "store_true"
+        p.add_argument(flag["flag"], **options)
     p.add_argument(
         "--set",
         action="append",

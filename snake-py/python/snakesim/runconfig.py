@@ -48,7 +48,10 @@ from snakesim.files import write_atomically
 #: Every key with its default, from Rust.
 DEFAULTS: dict[str, Any] = json.loads(_core.run_config_defaults())
 ARCHS: tuple[str, ...] = tuple(_core.ARCHS)
-TRAINERS = ("native", "sb3")
+#: The run configuration's command-line flags (key, flag, value kind, choices, help), from snake-rl:
+#: ``snakesim train`` builds its flags from them, as ``snake-cli train`` does.
+FLAGS: list[dict[str, Any]] = json.loads(_core.run_config_flags())
+TRAINERS: tuple[str, ...] = tuple(next(f["choices"] for f in FLAGS if f["key"] == "trainer"))
 #: Keys that define what is learnt; --resume refuses to change them.
 IDENTITY_KEYS: tuple[str, ...] = tuple(_core.IDENTITY_KEYS)
 EVAL_SEED_OFFSET: int = _core.EVAL_SEED_OFFSET

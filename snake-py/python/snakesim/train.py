@@ -109,7 +109,8 @@ def package_versions() -> dict[str, str]:
 
 
 def default_run_dir(config: Mapping[str, Any]) -> Path:
-    return Path("runs") / f"ppo-{config['arch']}-{config['joints']}-{config['preset']}-seed{config['seed']}"
+    """``runs/ppo-ARCH-JOINTS-PRESET-seedSEED``, as ``snake-cli train`` (snake-rl decides)."""
+    return Path(_core.default_run_dir(json.dumps(dict(config))))
 
 
 def _format_eval(evaluation: Mapping[str, Any]) -> str:
