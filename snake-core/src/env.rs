@@ -20,7 +20,9 @@ pub use action::{
 pub use config::{
     EnvConfig, GoalDistribution, ObservationLayout, StartDistribution, Task, MAX_GOAL_DISTANCE,
 };
-pub use reward::{paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardTerms};
+pub use reward::{
+    paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
+};
 pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
@@ -430,6 +432,61 @@ impl SnakeEnv {
         action: &[A],
         obs: &mut [f32],
     ) -> Result<StepOutcome> {
+        self.check_step(action, obs)?;
+        self.driver.set_action(action.iter().map(|&a| a.into()));
+        let (base, work) = match self.simulate(obs) {
+            Ok(done) => done,
+            Err(e) => {
+                self.phase = Phase::NeedsReset;
+                return Err(e);
+            }
+        };
+        let p = (base.pose.position.x, base.pose.position.y);
+        self.path_length += (p.0 - self.position.0).hypot(p.1 - self.position.1);
+        self.position = p;
+        self.work += work;
+
+        let weights = self.config.reward;
+        let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
+        let success = distance < self.config.goal_radius;
+        let terms = RewardTerms::compute(
+            &weights,
+            &RewardInputs {
+                success,
+                distance,
+                previous_distance: self.distance,
+                action: self.driver.action(),
+                previous_action: &self.previous_action,
+                work,
+            },
+        );
+        self.previous_action.copy_from_slice(self.driver.action());
+        self.distance = distance;
+        let reward = terms.total(&weights);
+        // The limits keep these finite; if physics ever drifts out of float32's range anyway, it is
+        // an error, never an inf handed to a learner.
+        if let Err(e) = finite_output(obs, reward, self.episode_return + reward) {
+            self.phase = Phase::NeedsReset;
+            return Err(e);
+        }
+        self.episode_step += 1;
+        self.episode_return += reward;
+        let terminated = success;
+        let truncated = self.episode_step >= self.config.max_episode_steps;
+        if terminated || truncated {
+            self.phase = Phase::Done;
+        }
+        Ok(StepOutcome {
+            reward,
+            terminated,
+            truncated,
+            info: self.info(terms, success),
+        })
+    }
+
+    /// A step may run: an episode is running, `obs` has the observation's length and `action` one
+    /// finite value per action dimension.
+    fn check_step<A: Copy + Into<f64>>(&self, action: &[A], obs: &[f32]) -> Result<()> {
         match self.phase {
             Phase::Running => {}
             Phase::NeedsReset => {
@@ -457,14 +514,18 @@ impl SnakeEnv {
                 return Err(invalid(format!("action[{j}] must be finite, got {a}")));
             }
         }
-        self.driver.set_action(action.iter().map(|&a| a.into()));
+        Ok(())
+    }
 
+    /// The physics of one env step (`physics_steps_per_env_step` steps, the driver's targets set
+    /// before each or before the first) and the observation after it; returns the base's state and
+    /// the motors' mechanical work (J) over the step.
+    fn simulate(&mut self, obs: &mut [f32]) -> Result<(observation::BaseState, f64)> {
         let Some(snake) = self.snake.as_mut() else {
             return Err(invalid(
                 "step() needs reset() first (no episode is running)",
             ));
         };
-        let weights = self.config.reward;
         let dt = snake.config().dt;
         let mut work = 0.0;
         let driver = &mut self.driver;
@@ -473,104 +534,44 @@ impl SnakeEnv {
         if let Some(trace) = trace.as_mut() {
             trace.clear();
         }
-        let result = (|| -> Result<observation::BaseState> {
-            if !per_physics_step {
+        if !per_physics_step {
+            driver.next_targets(&mut self.targets);
+            snake.set_targets(&self.targets)?;
+        }
+        for _ in 0..self.config.physics_steps_per_env_step {
+            if per_physics_step {
                 driver.next_targets(&mut self.targets);
                 snake.set_targets(&self.targets)?;
             }
-            for _ in 0..self.config.physics_steps_per_env_step {
-                if per_physics_step {
-                    driver.next_targets(&mut self.targets);
-                    snake.set_targets(&self.targets)?;
-                }
-                snake.step()?;
-                let body = snake.body();
-                snake.world().read_joints(
-                    body,
-                    &mut [],
-                    &mut self.joints.velocities,
-                    &mut self.torques,
-                )?;
-                let power: f64 = self
-                    .torques
-                    .iter()
-                    .zip(&self.joints.velocities)
-                    .map(|(t, v)| (t * v).abs())
-                    .sum();
-                work += power * dt;
-                if let Some(trace) = trace.as_mut() {
-                    trace.record(snake, Some(&self.targets))?;
-                }
-            }
-            let phase = per_physics_step.then(|| driver.wave_phase());
-            observation::write(
-                self.config.observation,
-                snake,
-                self.goal,
-                phase.filter(|_| self.config.observes_wave_phase()),
-                &mut self.joints,
-                obs,
-            )
-        })();
-        let base = match result {
-            Ok(base) => base,
-            Err(e) => {
-                self.phase = Phase::NeedsReset;
-                return Err(e);
-            }
-        };
-        let p = (base.pose.position.x, base.pose.position.y);
-        self.path_length += (p.0 - self.position.0).hypot(p.1 - self.position.1);
-        self.position = p;
-        self.work += work;
-
-        let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
-        let success = distance < self.config.goal_radius;
-        let mut terms = RewardTerms {
-            goal: if success {
-                weights.success_reward
-            } else {
-                -(weights.distance_weight * distance)
-            },
-            ..RewardTerms::default()
-        };
-        if weights.progress_weight != 0.0 {
-            terms.progress = weights.progress_weight * (self.distance - distance);
-        }
-        let action = self.driver.action();
-        if weights.smoothness_weight != 0.0 {
-            let change: f64 = action
+            snake.step()?;
+            let body = snake.body();
+            snake.world().read_joints(
+                body,
+                &mut [],
+                &mut self.joints.velocities,
+                &mut self.torques,
+            )?;
+            let power: f64 = self
+                .torques
                 .iter()
-                .zip(&self.previous_action)
-                .map(|(a, p)| (a - p) * (a - p))
+                .zip(&self.joints.velocities)
+                .map(|(t, v)| (t * v).abs())
                 .sum();
-            terms.smoothness = -weights.smoothness_weight * change;
+            work += power * dt;
+            if let Some(trace) = trace.as_mut() {
+                trace.record(snake, Some(&self.targets))?;
+            }
         }
-        if weights.energy_weight != 0.0 {
-            terms.energy = -weights.energy_weight * work;
-        }
-        self.previous_action.copy_from_slice(action);
-        self.distance = distance;
-        let reward = terms.total(&weights);
-        // The limits keep these finite; if physics ever drifts out of float32's range anyway, it is
-        // an error, never an inf handed to a learner.
-        if let Err(e) = finite_output(obs, reward, self.episode_return + reward) {
-            self.phase = Phase::NeedsReset;
-            return Err(e);
-        }
-        self.episode_step += 1;
-        self.episode_return += reward;
-        let terminated = success;
-        let truncated = self.episode_step >= self.config.max_episode_steps;
-        if terminated || truncated {
-            self.phase = Phase::Done;
-        }
-        Ok(StepOutcome {
-            reward,
-            terminated,
-            truncated,
-            info: self.info(terms, success),
-        })
+        let phase = per_physics_step.then(|| driver.wave_phase());
+        let base = observation::write(
+            self.config.observation,
+            snake,
+            self.goal,
+            phase.filter(|_| self.config.observes_wave_phase()),
+            &mut self.joints,
+            obs,
+        )?;
+        Ok((base, work))
     }
 
     fn check_obs_len(&self, obs: &[f32]) -> Result<()> {

@@ -51,7 +51,7 @@ pub use error::{Error, Result};
 pub use gait::{Gait, GaitKind, LateralUndulation};
 pub use math::{quaternion_from_euler, StartPose};
 pub use snake::Snake;
-pub use vec_env::{FinalStep, FinalSteps, VecSnakeEnv};
+pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};
 pub use world::{
     BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose, World,
 };

@@ -30,19 +30,18 @@ struct Slot {
 /// `final_obs`/`final_info`, Stable-Baselines3 in `infos[i]["terminal_observation"]`).
 ///
 /// ```
-/// use snake_core::{EnvConfig, VecSnakeEnv};
+/// use snake_core::{EnvConfig, StepBuffers, VecSnakeEnv};
 ///
 /// let mut envs = VecSnakeEnv::new(EnvConfig { max_episode_steps: 3, ..EnvConfig::snakebot_gym(4) }, 2)?;
-/// let (m, n, d) = (envs.num_envs(), envs.action_dim(), envs.observation_dim());
-/// let mut obs = vec![0.0f32; m * d];
-/// envs.reset(Some(7), &mut obs)?;
+/// let (m, n) = (envs.num_envs(), envs.action_dim());
+/// let mut out = StepBuffers::for_envs(&envs);
+/// envs.reset(Some(7), &mut out.obs)?;
 /// let actions = vec![0.3f32; m * n];
-/// let (mut rewards, mut terminated, mut truncated) = (vec![0.0; m], vec![false; m], vec![false; m]);
 /// for step in 1..=3 {
-///     let finals = envs.step(&actions, &mut obs, &mut rewards, &mut terminated, &mut truncated)?;
+///     let finals = envs.step_into(&actions, &mut out)?;
 ///     assert_eq!(finals.len(), if step == 3 { 2 } else { 0 });
 /// }
-/// assert!(truncated.iter().all(|t| *t));
+/// assert!(out.truncated.iter().all(|t| *t));
 /// # Ok::<(), snake_core::Error>(())
 /// ```
 #[derive(Debug)]
@@ -129,6 +128,43 @@ fn check_len(what: &str, len: usize, expected: usize) -> Result<()> {
         Err(invalid(format!(
             "{what} must have {expected} values, got {len}"
         )))
+    }
+}
+
+/// What [`VecSnakeEnv::step`] writes for every env, allocated once for a batch: each env's
+/// observation (`obs`, `num_envs * observation_dim` values, env after env), reward, and whether its
+/// episode terminated or was truncated on this step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepBuffers {
+    /// Observations, env after env (the next episode's first one where an episode ended).
+    pub obs: Vec<f32>,
+    /// Rewards.
+    pub rewards: Vec<f64>,
+    /// The episode reached the goal (Gymnasium's `terminated`).
+    pub terminated: Vec<bool>,
+    /// The episode hit its step limit (Gymnasium's `truncated`).
+    pub truncated: Vec<bool>,
+}
+
+impl StepBuffers {
+    /// Buffers for `num_envs` envs of `observation_dim` observations each.
+    pub fn new(num_envs: usize, observation_dim: usize) -> Self {
+        StepBuffers {
+            obs: vec![0.0; num_envs * observation_dim],
+            rewards: vec![0.0; num_envs],
+            terminated: vec![false; num_envs],
+            truncated: vec![false; num_envs],
+        }
+    }
+
+    /// Buffers for `envs`' batch.
+    pub fn for_envs(envs: &VecSnakeEnv) -> Self {
+        Self::new(envs.num_envs(), envs.observation_dim())
+    }
+
+    /// Env `i`'s episode ended on this step (terminated or truncated).
+    pub fn done(&self, i: usize) -> bool {
+        self.terminated[i] || self.truncated[i]
     }
 }
 
@@ -275,6 +311,21 @@ impl VecSnakeEnv {
             .map_err(|e| in_env(env, e))?;
         slot.info = Some(info);
         Ok(info)
+    }
+
+    /// [`VecSnakeEnv::step`] into `out`.
+    pub fn step_into<A: Copy + Into<f64> + Sync>(
+        &mut self,
+        actions: &[A],
+        out: &mut StepBuffers,
+    ) -> Result<FinalSteps<'_>> {
+        self.step(
+            actions,
+            &mut out.obs,
+            &mut out.rewards,
+            &mut out.terminated,
+            &mut out.truncated,
+        )
     }
 
     /// Steps every env with its `N` actions from `actions` (`M * N` values, `f32` or `f64`), writing

@@ -8,7 +8,7 @@ use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use snake_core::env::{EnvConfig, Info, ResetOptions, SnakeEnv};
-use snake_core::{StartPose, VecSnakeEnv};
+use snake_core::{StartPose, StepBuffers, VecSnakeEnv};
 
 mod lock;
 mod native;
@@ -338,21 +338,11 @@ impl VecEnv {
         } else {
             return Err(describe_array_error(actions, "actions", 2));
         };
-        let mut obs = vec![0.0f32; m * d];
-        let mut rewards = vec![0.0f64; m];
-        let mut terminated = vec![false; m];
-        let mut truncated = vec![false; m];
         // Bullet worlds are not Sync, so the finished episodes are copied out while the GIL is released.
+        let mut out = StepBuffers::new(m, d);
         let finished: Vec<(usize, Vec<f32>, Info)> = self
             .with(py, |envs| {
-                envs.step(
-                    &actions,
-                    &mut obs,
-                    &mut rewards,
-                    &mut terminated,
-                    &mut truncated,
-                )
-                .map(|f| {
+                envs.step_into(&actions, &mut out).map(|f| {
                     f.iter()
                         .map(|f| (f.env, f.observation.to_vec(), *f.info))
                         .collect()
@@ -367,14 +357,14 @@ impl VecEnv {
                 info_dict(py, info)?,
             ))?;
         }
-        let obs = PyArray1::from_vec(py, obs).reshape([m, d])?;
+        let obs = PyArray1::from_vec(py, out.obs).reshape([m, d])?;
         PyTuple::new(
             py,
             [
                 obs.into_any(),
-                PyArray1::from_vec(py, rewards).into_any(),
-                PyArray1::from_vec(py, terminated).into_any(),
-                PyArray1::from_vec(py, truncated).into_any(),
+                PyArray1::from_vec(py, out.rewards).into_any(),
+                PyArray1::from_vec(py, out.terminated).into_any(),
+                PyArray1::from_vec(py, out.truncated).into_any(),
                 finals.into_any(),
             ],
         )

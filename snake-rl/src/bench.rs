@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use snake_core::{EnvConfig, VecSnakeEnv};
+use snake_core::{EnvConfig, StepBuffers, VecSnakeEnv};
 
 use crate::config::limits;
 
@@ -40,26 +40,18 @@ pub fn env_throughput(
             })?;
         envs.with_pool(Arc::new(pool))
     };
-    let (n, d) = (config.action_dim(), config.observation_dim());
-    let mut obs = vec![0.0f32; n_envs * d];
-    envs.reset(Some(seed), &mut obs)?;
+    let n = config.action_dim();
+    let mut out = StepBuffers::for_envs(&envs);
+    envs.reset(Some(seed), &mut out.obs)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut actions = vec![0.0f32; n_envs * n];
-    let (mut rewards, mut terminated, mut truncated) =
-        (vec![0.0; n_envs], vec![false; n_envs], vec![false; n_envs]);
     let start = Instant::now();
     let mut steps = 0u64;
     while start.elapsed().as_secs_f64() < seconds {
         for a in actions.iter_mut() {
             *a = rng.gen_range(-1.0..=1.0);
         }
-        envs.step(
-            &actions,
-            &mut obs,
-            &mut rewards,
-            &mut terminated,
-            &mut truncated,
-        )?;
+        envs.step_into(&actions, &mut out)?;
         steps += n_envs as u64;
     }
     Ok(steps as f64 / start.elapsed().as_secs_f64())

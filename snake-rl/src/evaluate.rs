@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha12Rng;
-use snake_core::{EnvConfig, VecSnakeEnv};
+use snake_core::{EnvConfig, StepBuffers, VecSnakeEnv};
 
 use crate::policy::Policy;
 
@@ -115,32 +115,24 @@ pub fn run_episodes(
     let m = episodes.min(MAX_EVAL_ENVS);
     let targets: Vec<usize> = (0..m).map(|i| (episodes + i) / m).collect();
     let mut counts = vec![0usize; m];
-    let (n, d) = (config.action_dim(), config.observation_dim());
+    let n = config.action_dim();
     let mut envs = VecSnakeEnv::new(config.clone(), m)?;
     envs = match pool {
         Some(pool) => envs.with_pool(pool.clone()),
         None => envs.with_threads(1)?,
     };
-    let mut obs = vec![0.0f32; m * d];
-    envs.reset(Some(seed), &mut obs)?;
+    let mut out = StepBuffers::for_envs(&envs);
+    envs.reset(Some(seed), &mut out.obs)?;
     let step_seconds = config.snake.dt * f64::from(config.physics_steps_per_env_step);
     let mut actions = vec![0.0f32; m * n];
-    let (mut rewards, mut terminated, mut truncated) =
-        (vec![0.0; m], vec![false; m], vec![false; m]);
     let mut rng = ChaCha12Rng::seed_from_u64(seed);
     let mut done = Vec::with_capacity(episodes);
     while counts != targets {
         if stop() {
             return Err(EvalError::Interrupted);
         }
-        policy.act(&obs, m, deterministic, &mut rng, &mut actions);
-        let finals = envs.step(
-            &actions,
-            &mut obs,
-            &mut rewards,
-            &mut terminated,
-            &mut truncated,
-        )?;
+        policy.act(&out.obs, m, deterministic, &mut rng, &mut actions);
+        let finals = envs.step_into(&actions, &mut out)?;
         for f in finals.iter() {
             if counts[f.env] >= targets[f.env] {
                 continue;

@@ -17,7 +17,7 @@ use std::time::Instant;
 use rand::SeedableRng;
 use rand_chacha::ChaCha12Rng;
 use serde_json::{json, Map, Value};
-use snake_core::{EnvConfig, VecSnakeEnv};
+use snake_core::{EnvConfig, StepBuffers, VecSnakeEnv};
 
 use crate::buffer::RolloutBuffer;
 use crate::config::{RunConfig, TrainerKind};
@@ -354,7 +354,7 @@ pub fn train_prepared(
     let mut run = Run::new(config, dir, threads, checkpoint)?;
     // The loop itself stays on the caller's thread (a Python caller checks for Ctrl-C there; only the
     // main thread can), the envs and the updates use the pool.
-    run.train(&pool, observer)
+    run.learn(&pool, observer)
 }
 
 /// The state of one training session.
@@ -590,221 +590,33 @@ impl Run {
         Ok(Outcome::Interrupted(self.summary(), path))
     }
 
-    fn train(
+    /// SB3's `learn`: collect a rollout, update, log; evaluate and checkpoint after the update that
+    /// crosses each multiple of their frequency.
+    fn learn(
         &mut self,
         pool: &std::sync::Arc<rayon::ThreadPool>,
         observer: &mut dyn Observer,
     ) -> Result<Outcome, TrainError> {
         let c = self.config.clone();
-        let (m, n, d) = (
-            c.n_envs,
-            self.env_config.action_dim(),
-            self.env_config.observation_dim(),
-        );
-        // One env after the other on one thread; otherwise on the pool the updates use too.
-        let mut envs = VecSnakeEnv::new(self.env_config.clone(), m)?;
-        envs = if self.threads == 1 {
-            envs.with_threads(1)?
-        } else {
-            envs.with_pool(pool.clone())
-        };
-        let net = self.learner.net().clone();
-        let mut buffer = RolloutBuffer::new(c.ppo.n_steps, m, d, n);
-        let mut ws: Workspace = net.workspace(m);
-        let mut scratch = LossScratch::default();
-        let mut raw_obs = vec![0.0f32; m * d];
-        // A resumed run starts new episodes, seeded apart from the ones seen before (as SB3 resumes).
-        envs.reset(Some(c.seed.wrapping_add(self.timesteps)), &mut raw_obs)?;
-        let mut obs = raw_obs.clone();
-        if let Some(norm) = &mut self.normalizer {
-            norm.obs_rms.update(&raw_obs, m);
-            norm.reset_returns(m);
-            norm.normalize_obs(&mut obs);
-        }
-        let mut episode_starts = vec![true; m];
-        let (mut actions, mut clipped) = (vec![0.0f32; m * n], vec![0.0f32; m * n]);
-        let (mut values, mut log_probs) = (vec![0.0f32; m], vec![0.0f32; m]);
-        let (mut rewards64, mut rewards) = (vec![0.0f64; m], vec![0.0f32; m]);
-        let (mut terminated, mut truncated, mut dones) =
-            (vec![false; m], vec![false; m], vec![false; m]);
-        let mut terminal = vec![0.0f32; d];
+        let mut rollout = self.start_rollouts(pool)?;
         // The next multiple of `freq` after `t` (never, for 0).
         let every = |freq: u64, t: u64| t.checked_div(freq).map_or(u64::MAX, |k| (k + 1) * freq);
         let mut next_eval = every(c.eval_freq, self.timesteps);
         let mut next_checkpoint = every(c.checkpoint_freq, self.timesteps);
         let mut last_eval_at = None;
         observer.on_start(self.timesteps, c.timesteps);
-        let gamma32 = c.ppo.gamma as f32;
-
         while self.timesteps < c.timesteps {
             let rollout_start = Instant::now();
             let trained = self.timesteps;
-            buffer.reset();
-            for _ in 0..c.ppo.n_steps {
-                if observer.should_stop() {
-                    return self.interrupted(trained);
-                }
-                act::sample(
-                    &net,
-                    &self.learner.params,
-                    &obs,
-                    m,
-                    &mut self.rng,
-                    &mut ws,
-                    &mut scratch,
-                    &mut actions,
-                    &mut values,
-                    &mut log_probs,
-                );
-                act::clip_to_action_space(&actions, &mut clipped);
-                let finals = envs.step(
-                    &clipped,
-                    &mut raw_obs,
-                    &mut rewards64,
-                    &mut terminated,
-                    &mut truncated,
-                )?;
-                self.timesteps += m as u64;
-                for i in 0..m {
-                    rewards[i] = rewards64[i] as f32;
-                    dones[i] = terminated[i] || truncated[i];
-                }
-                // The finished episodes: statistics, and the final observations of truncated ones.
-                let mut bootstrap: Vec<(usize, Vec<f32>)> = Vec::new();
-                for f in finals.iter() {
-                    if self.episodes.len() == 100 {
-                        self.episodes.pop_front();
-                    }
-                    self.episodes.push_back((
-                        f.info.episode_return,
-                        f.info.episode_step,
-                        f.info.success,
-                    ));
-                    if truncated[f.env] && !terminated[f.env] {
-                        bootstrap.push((f.env, f.observation.to_vec()));
-                    }
-                }
-                let mut next_obs = raw_obs.clone();
-                if let Some(norm) = &mut self.normalizer {
-                    norm.obs_rms.update(&raw_obs, m);
-                    norm.normalize_obs(&mut next_obs);
-                    norm.normalize_rewards(&mut rewards, &dones);
-                }
-                for (env, final_obs) in bootstrap {
-                    terminal.copy_from_slice(&final_obs);
-                    if let Some(norm) = &self.normalizer {
-                        norm.normalize_obs(&mut terminal);
-                    }
-                    net.forward_value(&self.learner.params, &terminal, 1, &mut ws);
-                    rewards[env] += gamma32 * ws.value[0];
-                }
-                buffer.add(
-                    &obs,
-                    &actions,
-                    &rewards,
-                    &episode_starts,
-                    &values,
-                    &log_probs,
-                );
-                obs = next_obs;
-                episode_starts.copy_from_slice(&dones);
-                observer.on_step(self.timesteps);
+            if !self.collect_rollout(&mut rollout, observer)? {
+                return self.interrupted(trained);
             }
-            net.forward_value(&self.learner.params, &obs, m, &mut ws);
-            let last_values = ws.value[..m].to_vec();
-            buffer.compute_returns_and_advantage(
-                &last_values,
-                &episode_starts,
-                c.ppo.gamma,
-                c.ppo.gae_lambda,
-            );
             let rollout_seconds = rollout_start.elapsed().as_secs_f64();
-
             let update_start = Instant::now();
-            let progress_remaining = 1.0 - self.timesteps as f64 / c.timesteps as f64;
-            let settings = UpdateSettings {
-                n_epochs: c.ppo.n_epochs,
-                batch_size: c.ppo.batch_size,
-                loss: LossSettings {
-                    clip_range: c.ppo.clip_range.at(progress_remaining) as f32,
-                    clip_range_vf: c.ppo.clip_range_vf.map(|v| v as f32),
-                    ent_coef: c.ppo.ent_coef as f32,
-                    vf_coef: c.ppo.vf_coef as f32,
-                    normalize_advantage: c.ppo.normalize_advantage,
-                },
-                max_grad_norm: c.ppo.max_grad_norm,
-                target_kl: c.ppo.target_kl,
-                learning_rate: c.ppo.learning_rate.at(progress_remaining),
-            };
-            let before = (
-                self.learner.params.clone(),
-                self.learner.adam.clone(),
-                self.rng.clone(),
-            );
-            let stats = match self
-                .learner
-                .update(&buffer, &settings, &mut self.rng, Some(pool))
-            {
-                Ok(s) => s,
-                Err(e) => {
-                    // Keep the last good state: the parameters before this update.
-                    (self.learner.params, self.learner.adam, self.rng) = before;
-                    let path = self.save_checkpoint("non-finite")?;
-                    return Err(TrainError::NonFinite(format!(
-                        "training stopped at update {} ({} timesteps): {e}; saved the state before it to {}",
-                        self.n_updates / c.ppo.n_epochs.max(1) as u64 + 1,
-                        self.timesteps,
-                        path.display()
-                    )));
-                }
-            };
-            self.n_updates += stats.epochs as u64;
+            let settings = self.update_settings();
+            let stats = self.update(&rollout.buffer, &settings, pool)?;
             let update_seconds = update_start.elapsed().as_secs_f64();
-            self.rollout_seconds += rollout_seconds;
-            self.update_seconds += update_seconds;
-            let rss = rss_mib();
-            self.rss_first_update.get_or_insert(rss);
-            let busy = self.started.elapsed().as_secs_f64() - self.eval_seconds;
-            let progress = Progress {
-                timesteps: self.timesteps,
-                total: c.timesteps,
-                timesteps_per_second: (self.timesteps - self.start_timesteps) as f64
-                    / busy.max(1e-9),
-                ep_rew_mean: mean(self.episodes.iter().map(|e| e.0)),
-                ep_success_rate: mean(self.episodes.iter().map(|e| f64::from(u8::from(e.2)))),
-                update: stats,
-                rollout_seconds,
-                update_seconds,
-            };
-            let mut scalars = vec![
-                ("train/entropy_loss", stats.entropy_loss),
-                ("train/policy_gradient_loss", stats.policy_gradient_loss),
-                ("train/value_loss", stats.value_loss),
-                ("train/approx_kl", stats.approx_kl),
-                ("train/clip_fraction", stats.clip_fraction),
-                ("train/loss", stats.loss),
-                ("train/explained_variance", stats.explained_variance),
-                ("train/std", stats.std),
-                ("train/clip_range", f64::from(settings.loss.clip_range)),
-                ("train/learning_rate", settings.learning_rate),
-                ("time/fps", progress.timesteps_per_second),
-                ("time/rollout_seconds", rollout_seconds),
-                ("time/update_seconds", update_seconds),
-                ("time/rss_mib", rss),
-            ];
-            if let Some(r) = progress.ep_rew_mean {
-                scalars.push(("rollout/ep_rew_mean", r));
-                scalars.push((
-                    "rollout/ep_len_mean",
-                    mean(self.episodes.iter().map(|e| e.1 as f64)).unwrap_or(0.0),
-                ));
-                scalars.push((
-                    "rollout/success_rate",
-                    progress.ep_success_rate.unwrap_or(0.0),
-                ));
-            }
-            self.log(&scalars)?;
-            observer.on_update(&progress);
+            self.log_update(&stats, &settings, rollout_seconds, update_seconds, observer)?;
             // After the update: the evaluation and checkpoint at T hold the policy trained on T.
             if self.timesteps >= next_eval && self.timesteps < c.timesteps {
                 if !self.evaluate(pool, observer)? {
@@ -825,6 +637,278 @@ impl Run {
         self.save_final()?;
         Ok(Outcome::Finished(self.summary()))
     }
+
+    /// The envs (on the pool, or one after the other for one thread), reset with a seed that sets a
+    /// resumed run's episodes apart from the ones seen before (as SB3 resumes), and the buffers.
+    fn start_rollouts(
+        &mut self,
+        pool: &std::sync::Arc<rayon::ThreadPool>,
+    ) -> Result<Rollout, TrainError> {
+        let c = &self.config;
+        let (m, n, d) = (
+            c.n_envs,
+            self.env_config.action_dim(),
+            self.env_config.observation_dim(),
+        );
+        let mut envs = VecSnakeEnv::new(self.env_config.clone(), m)?;
+        envs = if self.threads == 1 {
+            envs.with_threads(1)?
+        } else {
+            envs.with_pool(pool.clone())
+        };
+        let net = self.learner.net().clone();
+        let mut out = StepBuffers::for_envs(&envs);
+        envs.reset(Some(c.seed.wrapping_add(self.timesteps)), &mut out.obs)?;
+        let mut obs = out.obs.clone();
+        if let Some(norm) = &mut self.normalizer {
+            norm.obs_rms.update(&out.obs, m);
+            norm.reset_returns(m);
+            norm.normalize_obs(&mut obs);
+        }
+        Ok(Rollout {
+            envs,
+            buffer: RolloutBuffer::new(c.ppo.n_steps, m, d, n),
+            ws: net.workspace(m),
+            net,
+            scratch: LossScratch::default(),
+            out,
+            obs,
+            episode_starts: vec![true; m],
+            actions: vec![0.0; m * n],
+            clipped: vec![0.0; m * n],
+            values: vec![0.0; m],
+            log_probs: vec![0.0; m],
+            rewards: vec![0.0; m],
+            dones: vec![false; m],
+            terminal: vec![0.0; d],
+        })
+    }
+
+    /// SB3's `collect_rollouts`: `n_steps` steps of every env into the buffer (actions sampled from
+    /// the policy, clipped to [-1, 1] for the env, stored unclipped; a truncated episode's last reward
+    /// gains `gamma` times the value of its final observation), then the returns and advantages
+    /// (GAE). False when stopping was asked for (nothing of this rollout is used).
+    fn collect_rollout(
+        &mut self,
+        r: &mut Rollout,
+        observer: &mut dyn Observer,
+    ) -> Result<bool, TrainError> {
+        let m = self.config.n_envs;
+        let (n_steps, gamma, gae_lambda) = (
+            self.config.ppo.n_steps,
+            self.config.ppo.gamma,
+            self.config.ppo.gae_lambda,
+        );
+        let gamma32 = gamma as f32;
+        r.buffer.reset();
+        for _ in 0..n_steps {
+            if observer.should_stop() {
+                return Ok(false);
+            }
+            act::sample(
+                &r.net,
+                &self.learner.params,
+                &r.obs,
+                m,
+                &mut self.rng,
+                &mut r.ws,
+                &mut r.scratch,
+                &mut r.actions,
+                &mut r.values,
+                &mut r.log_probs,
+            );
+            act::clip_to_action_space(&r.actions, &mut r.clipped);
+            let finals = r.envs.step_into(&r.clipped, &mut r.out)?;
+            self.timesteps += m as u64;
+            for i in 0..m {
+                r.rewards[i] = r.out.rewards[i] as f32;
+                r.dones[i] = r.out.done(i);
+            }
+            // The finished episodes: statistics, and the final observations of truncated ones.
+            let mut bootstrap: Vec<(usize, Vec<f32>)> = Vec::new();
+            for f in finals.iter() {
+                if self.episodes.len() == 100 {
+                    self.episodes.pop_front();
+                }
+                self.episodes.push_back((
+                    f.info.episode_return,
+                    f.info.episode_step,
+                    f.info.success,
+                ));
+                if r.out.truncated[f.env] && !r.out.terminated[f.env] {
+                    bootstrap.push((f.env, f.observation.to_vec()));
+                }
+            }
+            let mut next_obs = r.out.obs.clone();
+            if let Some(norm) = &mut self.normalizer {
+                norm.obs_rms.update(&r.out.obs, m);
+                norm.normalize_obs(&mut next_obs);
+                norm.normalize_rewards(&mut r.rewards, &r.dones);
+            }
+            for (env, final_obs) in bootstrap {
+                r.terminal.copy_from_slice(&final_obs);
+                if let Some(norm) = &self.normalizer {
+                    norm.normalize_obs(&mut r.terminal);
+                }
+                r.net
+                    .forward_value(&self.learner.params, &r.terminal, 1, &mut r.ws);
+                r.rewards[env] += gamma32 * r.ws.value[0];
+            }
+            r.buffer.add(
+                &r.obs,
+                &r.actions,
+                &r.rewards,
+                &r.episode_starts,
+                &r.values,
+                &r.log_probs,
+            );
+            r.obs = next_obs;
+            r.episode_starts.copy_from_slice(&r.dones);
+            observer.on_step(self.timesteps);
+        }
+        r.net
+            .forward_value(&self.learner.params, &r.obs, m, &mut r.ws);
+        let last_values = r.ws.value[..m].to_vec();
+        r.buffer
+            .compute_returns_and_advantage(&last_values, &r.episode_starts, gamma, gae_lambda);
+        Ok(true)
+    }
+
+    /// The update's settings at the current progress (schedules of the learning rate and clip range).
+    fn update_settings(&self) -> UpdateSettings {
+        let (c, ppo) = (&self.config, &self.config.ppo);
+        let progress_remaining = 1.0 - self.timesteps as f64 / c.timesteps as f64;
+        UpdateSettings {
+            n_epochs: ppo.n_epochs,
+            batch_size: ppo.batch_size,
+            loss: LossSettings {
+                clip_range: ppo.clip_range.at(progress_remaining) as f32,
+                clip_range_vf: ppo.clip_range_vf.map(|v| v as f32),
+                ent_coef: ppo.ent_coef as f32,
+                vf_coef: ppo.vf_coef as f32,
+                normalize_advantage: ppo.normalize_advantage,
+            },
+            max_grad_norm: ppo.max_grad_norm,
+            target_kl: ppo.target_kl,
+            learning_rate: ppo.learning_rate.at(progress_remaining),
+        }
+    }
+
+    /// SB3's `train`: the PPO update over the rollout. A loss or gradient that turns non-finite
+    /// restores the state before the update, saves it, and stops training.
+    fn update(
+        &mut self,
+        buffer: &RolloutBuffer,
+        settings: &UpdateSettings,
+        pool: &std::sync::Arc<rayon::ThreadPool>,
+    ) -> Result<UpdateStats, TrainError> {
+        let before = (
+            self.learner.params.clone(),
+            self.learner.adam.clone(),
+            self.rng.clone(),
+        );
+        match self
+            .learner
+            .update(buffer, settings, &mut self.rng, Some(pool))
+        {
+            Ok(stats) => {
+                self.n_updates += stats.epochs as u64;
+                Ok(stats)
+            }
+            Err(e) => {
+                // Keep the last good state: the parameters before this update.
+                (self.learner.params, self.learner.adam, self.rng) = before;
+                let path = self.save_checkpoint("non-finite")?;
+                Err(TrainError::NonFinite(format!(
+                    "training stopped at update {} ({} timesteps): {e}; saved the state before it to {}",
+                    self.n_updates / self.config.ppo.n_epochs.max(1) as u64 + 1,
+                    self.timesteps,
+                    path.display()
+                )))
+            }
+        }
+    }
+
+    /// After an update: the time split, memory, and SB3's `train/*`, `rollout/*` and `time/*`
+    /// scalars to TensorBoard and the observer.
+    fn log_update(
+        &mut self,
+        stats: &UpdateStats,
+        settings: &UpdateSettings,
+        rollout_seconds: f64,
+        update_seconds: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<(), TrainError> {
+        self.rollout_seconds += rollout_seconds;
+        self.update_seconds += update_seconds;
+        let rss = rss_mib();
+        self.rss_first_update.get_or_insert(rss);
+        let busy = self.started.elapsed().as_secs_f64() - self.eval_seconds;
+        let progress = Progress {
+            timesteps: self.timesteps,
+            total: self.config.timesteps,
+            timesteps_per_second: (self.timesteps - self.start_timesteps) as f64 / busy.max(1e-9),
+            ep_rew_mean: mean(self.episodes.iter().map(|e| e.0)),
+            ep_success_rate: mean(self.episodes.iter().map(|e| f64::from(u8::from(e.2)))),
+            update: *stats,
+            rollout_seconds,
+            update_seconds,
+        };
+        let mut scalars = vec![
+            ("train/entropy_loss", stats.entropy_loss),
+            ("train/policy_gradient_loss", stats.policy_gradient_loss),
+            ("train/value_loss", stats.value_loss),
+            ("train/approx_kl", stats.approx_kl),
+            ("train/clip_fraction", stats.clip_fraction),
+            ("train/loss", stats.loss),
+            ("train/explained_variance", stats.explained_variance),
+            ("train/std", stats.std),
+            ("train/clip_range", f64::from(settings.loss.clip_range)),
+            ("train/learning_rate", settings.learning_rate),
+            ("time/fps", progress.timesteps_per_second),
+            ("time/rollout_seconds", rollout_seconds),
+            ("time/update_seconds", update_seconds),
+            ("time/rss_mib", rss),
+        ];
+        if let Some(r) = progress.ep_rew_mean {
+            scalars.push(("rollout/ep_rew_mean", r));
+            scalars.push((
+                "rollout/ep_len_mean",
+                mean(self.episodes.iter().map(|e| e.1 as f64)).unwrap_or(0.0),
+            ));
+            scalars.push((
+                "rollout/success_rate",
+                progress.ep_success_rate.unwrap_or(0.0),
+            ));
+        }
+        self.log(&scalars)?;
+        observer.on_update(&progress);
+        Ok(())
+    }
+}
+
+/// What collecting rollouts uses besides the run's state, allocated once: the envs, the rollout
+/// buffer, the network's workspace, and the buffers of one step.
+struct Rollout {
+    envs: VecSnakeEnv,
+    buffer: RolloutBuffer,
+    net: ActorCritic,
+    ws: Workspace,
+    scratch: LossScratch,
+    /// The envs' outputs: raw observations, rewards, terminations and truncations.
+    out: StepBuffers,
+    /// The policy's observations (normalised with `normalize`).
+    obs: Vec<f32>,
+    episode_starts: Vec<bool>,
+    actions: Vec<f32>,
+    clipped: Vec<f32>,
+    values: Vec<f32>,
+    log_probs: Vec<f32>,
+    /// The rewards as stored (float32, normalised with `normalize`, bootstrapped on truncation).
+    rewards: Vec<f32>,
+    dones: Vec<bool>,
+    /// A truncated episode's final observation.
+    terminal: Vec<f32>,
 }
 
 fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {

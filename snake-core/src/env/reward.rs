@@ -162,7 +162,53 @@ pub struct RewardTerms {
     pub energy: f64,
 }
 
+/// What one step's reward is computed from.
+#[derive(Debug, Clone, Copy)]
+pub struct RewardInputs<'a> {
+    /// The base ended the step within the goal radius.
+    pub success: bool,
+    /// Distance to the goal after the step ([`paper_distance`]).
+    pub distance: f64,
+    /// Distance to the goal before the step.
+    pub previous_distance: f64,
+    /// The step's action, clipped to [-1, 1].
+    pub action: &'a [f64],
+    /// The previous step's (zeros on an episode's first step).
+    pub previous_action: &'a [f64],
+    /// The motors' mechanical work over the step, J.
+    pub work: f64,
+}
+
 impl RewardTerms {
+    /// One step's reward terms (Gymnasium's `_get_rew`: the reward is [`RewardTerms::total`], the
+    /// terms go to `info`). Terms whose weight is 0 stay exactly 0.
+    pub fn compute(weights: &RewardConfig, step: &RewardInputs<'_>) -> Self {
+        let mut terms = RewardTerms {
+            goal: if step.success {
+                weights.success_reward
+            } else {
+                -(weights.distance_weight * step.distance)
+            },
+            ..RewardTerms::default()
+        };
+        if weights.progress_weight != 0.0 {
+            terms.progress = weights.progress_weight * (step.previous_distance - step.distance);
+        }
+        if weights.smoothness_weight != 0.0 {
+            let change: f64 = step
+                .action
+                .iter()
+                .zip(step.previous_action)
+                .map(|(a, p)| (a - p) * (a - p))
+                .sum();
+            terms.smoothness = -weights.smoothness_weight * change;
+        }
+        if weights.energy_weight != 0.0 {
+            terms.energy = -weights.energy_weight * step.work;
+        }
+        terms
+    }
+
     /// The reward: the goal term plus every enabled shaping term.
     pub fn total(&self, weights: &RewardConfig) -> f64 {
         let mut reward = self.goal;

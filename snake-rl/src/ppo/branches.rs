@@ -13,7 +13,7 @@
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use super::loss::{self, LossScratch, LossSettings, LossStats, LossSums, Minibatch};
-use super::update::{NonFinite, UpdateSettings};
+use super::settings::{NonFinite, UpdateSettings};
 use crate::buffer::{MinibatchData, RolloutBuffer};
 use crate::nn::network::{Branch, BranchWorkspace};
 use crate::nn::ActorCritic;

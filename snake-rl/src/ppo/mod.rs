@@ -3,7 +3,9 @@
 pub mod act;
 mod branches;
 pub mod loss;
+pub mod settings;
 pub mod update;
 
 pub use loss::{LossScratch, LossSettings, LossStats, Minibatch};
-pub use update::{Learner, NonFinite, UpdateSettings, UpdateStats};
+pub use settings::{NonFinite, UpdateSettings, UpdateStats};
+pub use update::Learner;
