@@ -14,10 +14,10 @@ import importlib.util
 # snake-py/pyproject.toml.
 EXTRAS: dict[str, tuple[str, tuple[str, ...]]] = {
     "sb3": (
-        "Stable-Baselines3 (the SB3 trainer, SnakeVecEnv, export --sb3, SB3 .zip models)",
+        "Stable-Baselines3 support (the SB3 trainer, SnakeVecEnv, export --sb3, SB3 .zip models)",
         ("stable_baselines3", "torch", "tensorboard"),
     ),
-    "sweep": ("Sweeps and searches on Ray (snakesim sweep, snakesim search)", ("ray", "optuna")),
+    "sweep": ("Running sweeps and searches on Ray (snakesim sweep, snakesim search)", ("ray", "optuna")),
 }
 
 
