@@ -98,7 +98,7 @@ def installed():
 
 
 def test_the_wheel_is_manylinux_abi3_with_bullet_inside(installed):
-    assert re.fullmatch(r"snakesim-[^-]+-cp39-abi3-manylinux_2_\d+_x86_64\.whl", installed.wheel.name)
+    assert re.fullmatch(r"snakesim-[^-]+-cp311-abi3-manylinux_2_\d+_x86_64\.whl", installed.wheel.name)
     libs = sorted(p.name for p in (installed.site_packages / "snakesim.libs").iterdir())
     assert [re.sub(r"-[0-9a-f]{8}\.so", ".so", name) for name in libs] == [
         "libBulletCollision-float64.so.3.24",
