@@ -7,7 +7,9 @@ checkout and by CI. What is specific to a checkout (the editable snakesim instal
 checkout's own snake-py/python, and the `snakesim` command) goes into the checkout's own small .venv/,
 which sees BASE's packages through a .pth that adds BASE's site-packages (and runs BASE's own .pth
 files). BASE's commands (pytest, ruff, maturin, tensorboard, rerun, ...) get a counterpart in .venv/bin
-that runs .venv's interpreter, so they import this checkout's snakesim.
+that runs .venv's interpreter, so they import this checkout's snakesim. Layering again over another
+BASE (scripts/setup's environment, then scripts/test's larger one, or back) first removes the commands
+the previous layering made (listed in .venv/.snakesim-layer-commands).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from pathlib import Path
 # Written by `python -m venv` itself; never replaced by BASE's counterparts.
 OWN = ("python", "pip", "activate", "Activate.ps1")
 PTH = "_snakesim_base.pth"
+MADE = ".snakesim-layer-commands"
 
 
 def site_packages(venv: Path) -> Path:
@@ -29,12 +32,18 @@ def site_packages(venv: Path) -> Path:
 
 def layer(venv: Path, base: Path) -> int:
     base_site = site_packages(base)
+    made_list = venv / MADE
+    if made_list.is_file():
+        for name in made_list.read_text().split():
+            old = venv / "bin" / name
+            if not name.startswith(OWN) and "/" not in name and (old.is_symlink() or old.is_file()):
+                old.unlink()
     (site_packages(venv) / PTH).write_text(f"import site; site.addsitedir({str(base_site)!r})\n")
     python = str(venv.resolve() / "bin" / "python").encode()
     # Longest first, so that .../python3.11 is not read as .../python3 followed by ".11".
     names = (f"python3.{sys.version_info[1]}", "python3", "python")
     interpreters = [f"{base}/bin/{name}".encode() for name in names]
-    made = 0
+    made = []
     for command in sorted((base / "bin").iterdir()):
         if command.name.startswith(OWN) or not command.is_file():
             continue
@@ -52,8 +61,9 @@ def layer(venv: Path, base: Path) -> int:
         else:
             # A native program (ruff, maturin): nothing in it names an interpreter.
             target.symlink_to(command)
-        made += 1
-    return made
+        made.append(command.name)
+    made_list.write_text("".join(f"{name}\n" for name in made))
+    return len(made)
 
 
 def main() -> None:

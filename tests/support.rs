@@ -235,8 +235,8 @@ pub fn reference_python() -> Option<PathBuf> {
     let _ = writeln!(
         std::io::stderr(),
         "{test}: skipped, parity with pybullet 3.2.7 not checked: no reference environment \
-         ({}); create it with `bash scripts/setup`, or set SNAKESIM_PYTHON to a Python with \
-         pybullet==3.2.7",
+         ({}); create it with `bash scripts/setup`, then `bash scripts/test` (which adds pybullet \
+         to .venv), or set SNAKESIM_PYTHON to a Python with pybullet==3.2.7",
         venv.display()
     );
     None

@@ -78,3 +78,25 @@ def test_layering_refuses_what_is_not_a_venv(tmp_path):
     assert done.returncode == 1
     missing = tmp_path / "nothing"
     assert done.stderr.strip() == f"error: {missing} is not a virtual environment (no pyvenv.cfg)"
+
+
+def test_layering_over_another_environment_drops_the_previous_ones_commands(tmp_path):
+    """scripts/setup layers .venv/ over its environment, scripts/test over the larger test one (and back
+    where the locks change): no command of the one before is left behind, the venv's own are kept."""
+    small, large, own = tmp_path / "small", tmp_path / "large", tmp_path / "checkout" / ".venv"
+    for base, names in ((small, ["maturin"]), (large, ["maturin", "pytest"])):
+        make_venv(base)
+        for name in names:
+            (base / "bin" / name).write_text(f"#!{base}/bin/python3\nprint('{name}')\n")
+    make_venv(own)
+    (own / "bin" / "snakesim").write_text("#!/bin/sh\n")  # maturin develop's, not the layer's
+
+    def layer(base: Path) -> None:
+        subprocess.run([sys.executable, str(LAYER), str(own), str(base)], check=True, capture_output=True)
+
+    layer(large)
+    assert (own / "bin" / "pytest").is_file()
+    layer(small)
+    assert not (own / "bin" / "pytest").exists()
+    assert (own / "bin" / "maturin").read_text().startswith(f"#!{own.resolve() / 'bin' / 'python'}")
+    assert (own / "bin" / "snakesim").is_file() and (own / "bin" / "python").exists()

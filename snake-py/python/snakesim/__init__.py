@@ -22,12 +22,15 @@ from __future__ import annotations
 
 import gymnasium
 
+from snakesim import extras
 from snakesim._core import __version__
 from snakesim.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS
 from snakesim.env import SnakeEnv, SnakeGoalEnv
 from snakesim.vector import SnakeVectorEnv
 
-__all__ = ["SnakeEnv", "SnakeGoalEnv", "SnakeVecEnv", "SnakeVectorEnv", "__version__", "register_envs"]
+__all__ = ["SnakeEnv", "SnakeGoalEnv", "SnakeVectorEnv", "__version__", "register_envs"]
+if extras.available("sb3"):  # without the extra, `from snakesim import *` leaves it out
+    __all__.insert(2, "SnakeVecEnv")
 
 ENV_ID = "snakesim/Snake-v0"
 GOAL_ENV_ID = "snakesim/SnakeGoal-v0"
@@ -52,7 +55,8 @@ def register_envs() -> None:
 
 
 def __getattr__(name: str):
-    # SnakeVecEnv needs stable-baselines3, an optional dependency: import it only when asked for.
+    # SnakeVecEnv needs stable-baselines3 (the extra snakesim[sb3]): import it only when asked for; without
+    # it, asking is an ImportError naming the pip install (snakesim.extras).
     if name == "SnakeVecEnv":
         from snakesim.sb3 import SnakeVecEnv
 

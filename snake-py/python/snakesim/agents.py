@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from snakesim import runconfig
+from snakesim import extras, runconfig
 from snakesim.config import ENV_DEFAULTS
 
 MODEL_FILE = "model.zip"
@@ -329,6 +329,7 @@ def load_agent(
             f"the env ({env_kwargs['joints']} joints) has {obs_dim} and {act_dim}: pass --joints "
             f"{info.action_dim} (or the observation it was trained with)"
         )
+    extras.require("sb3", f"loading the Stable-Baselines3 model {model_path}")
     policy, arch = _load_policy(model_path, info, device)
     normalizer = None
     if normalizer_path is not None and normalizer_path.is_file():
@@ -491,8 +492,9 @@ def run_episodes(
     Up to ``max_envs`` episodes run at once, env i seeded with ``seed + i`` (its later episodes
     continue its stream), so a seed gives the same episodes whatever the policy.
     """
+    from snakesim import _core
+    from snakesim.config import action_array, env_config
     from snakesim.env import make_env
-    from snakesim.sb3 import SnakeVecEnv
 
     if episodes < 1:
         raise ValueError(f"episodes must be at least 1, got {episodes}")
@@ -503,17 +505,16 @@ def run_episodes(
     m = min(episodes, max_envs)
     targets = [(episodes + i) // m for i in range(m)]  # as SB3's evaluate_policy splits them
     counts = [0] * m
-    venv = SnakeVecEnv(m, **env_kwargs)
-    venv.seed(seed)
-    obs = venv.reset()
+    # The batched Rust env itself (as SnakeVecEnv steps it, without needing Stable-Baselines3): env i
+    # is seeded with seed + i; each finished episode comes with its last observation and info.
+    venv = _core.VecEnv(env_config(**env_kwargs), m)
+    obs = venv.reset(seed)
     done_episodes: list[Episode] = []
     while counts != targets:
-        obs, _, dones, infos = venv.step(act(obs))
-        for i in np.flatnonzero(dones):
+        obs, _, _, _, finals = venv.step(action_array(act(obs)))
+        for i, final, info in sorted(finals, key=lambda done: done[0]):
             if counts[i] >= targets[i]:
                 continue
-            info = infos[i]
-            final = info["terminal_observation"]
             start = info["start"]
             done_episodes.append(
                 Episode(
@@ -528,7 +529,6 @@ def run_episodes(
                 )
             )
             counts[i] += 1
-    venv.close()
     return done_episodes
 
 

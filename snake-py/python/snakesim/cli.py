@@ -204,12 +204,15 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 # -- evaluate -------------------------------------------------------------------------------------
 def _load_agent(args: argparse.Namespace):
-    import torch
-
+    from snakesim import extras
     from snakesim.agents import load_agent
 
     # One thread: a small MLP gains nothing from more, and they would compete with the env's threads.
-    torch.set_num_threads(args.torch_threads)
+    # (Only SB3 models use torch; native models and baselines run without the sb3 extra.)
+    if extras.available("sb3"):
+        import torch
+
+        torch.set_num_threads(args.torch_threads)
     overrides = None
     if getattr(args, "goal", None) is not None:
         # A fixed goal instead of the task's: e.g. the paper's (0, -10) for a goal-task agent.
@@ -622,6 +625,7 @@ def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     from snakesim.agents import AgentError
+    from snakesim.extras import MissingExtra
     from snakesim.plots import PlotError
     from snakesim.replay import ReplayError
     from snakesim.rerun_log import RecordingError
@@ -640,6 +644,7 @@ def _main(argv: list[str] | None) -> int:
         RecordingError,
         SweepError,
         TrainingFailed,
+        MissingExtra,
     ) as error:
         print(f"snakesim {args.command}: error: {_one_line(error)}", file=sys.stderr)
         return 1

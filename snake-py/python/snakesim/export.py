@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from snakesim import extras
 from snakesim.files import write_atomically
 
 
@@ -27,6 +28,7 @@ def vecnormalize_path(zip_path: str | os.PathLike) -> Path:
 def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     """Writes the native ``agent`` (see :func:`snakesim.agents.load_agent`) as an SB3 PPO zip; returns
     the files written."""
+    extras.require("sb3", "snakesim export --sb3")
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize

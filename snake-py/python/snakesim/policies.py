@@ -13,11 +13,16 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import torch
 from gymnasium import spaces
-from stable_baselines3.common.preprocessing import get_flattened_obs_dim
-from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
-from torch import nn
+
+from snakesim import extras
+
+extras.require("sb3", "snakesim.policies (the paper's networks in Stable-Baselines3)")
+
+import torch  # noqa: E402
+from stable_baselines3.common.preprocessing import get_flattened_obs_dim  # noqa: E402
+from stable_baselines3.common.torch_layers import BaseFeaturesExtractor  # noqa: E402
+from torch import nn  # noqa: E402
 
 HEADS = {"pi": [64, 64], "vf": [64, 64]}
 SHARED = [128, 128]

@@ -7,10 +7,13 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
-from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
 
-from snakesim import _core
+from snakesim import _core, extras
 from snakesim.config import ENV_DEFAULTS, action_array, env_config
+
+extras.require("sb3", "snakesim.SnakeVecEnv (Stable-Baselines3's VecEnv)")
+
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn  # noqa: E402
 
 
 class SnakeVecEnv(VecEnv):

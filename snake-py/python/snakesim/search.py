@@ -24,7 +24,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim import runconfig, sweep
+from snakesim import extras, runconfig, sweep
 from snakesim.files import write_atomically
 
 DISTRIBUTIONS = ("uniform", "loguniform", "randint", "choice")
@@ -166,6 +166,7 @@ def search(
     base = planned.overrides
     resolved = runconfig.resolve(base)
     parsed = load_space(space, base)
+    extras.require("sweep")
     from ray import tune
     from ray.tune.schedulers import ASHAScheduler
     from ray.tune.search.optuna import OptunaSearch

@@ -32,7 +32,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim import _core, agents, runconfig
+from snakesim import _core, agents, extras, runconfig
 from snakesim.files import write_atomically
 
 EVAL_FIELDS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
@@ -233,6 +233,7 @@ class Trainer:
         log: Callable[[str], None] | None = None,
         on_evaluation: Callable[[dict[str, Any]], None] | None = None,
     ) -> None:
+        extras.require("sb3", "the SB3 trainer (trainer: sb3; the default, native, needs no extra)")
         self.resume = resume
         self.on_evaluation = on_evaluation
         self.verbose = verbose

@@ -29,6 +29,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from snakesim import extras
 from snakesim.sweep import (
     CONNECT_TIMEOUT_S,
     TRIAL_LOCK_WAIT_S,
@@ -39,6 +40,8 @@ from snakesim.sweep import (
     next_session,
     trial_finished,
 )
+
+extras.require("sweep")
 
 #: Each training session of a trial, one JSON line, in its run directory.
 SESSIONS_FILE = "sessions.jsonl"
