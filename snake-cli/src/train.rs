@@ -49,9 +49,9 @@ pub fn with_flags(cmd: clap::Command) -> clap::Command {
             .long(f.key.replace('_', "-"))
             .help(f.help());
         cmd.arg(match f.value {
-            FlagValue::Integer => arg
+            FlagValue::Integer { min, max } => arg
                 .value_name(f.key.to_uppercase())
-                .value_parser(flags::parse_integer),
+                .value_parser(move |text: &str| flags::parse_integer(text, min, max)),
             FlagValue::Choice(names) => {
                 arg.value_parser(clap::builder::PossibleValuesParser::new(names()))
             }
@@ -66,7 +66,7 @@ fn flag_layer(matches: &clap::ArgMatches) -> Value {
     let mut m = Map::new();
     for f in FLAGS.iter().filter(|f| !f.sb3_only) {
         let value = match f.value {
-            FlagValue::Integer => matches.get_one::<u64>(f.key).map(|v| Value::from(*v)),
+            FlagValue::Integer { .. } => matches.get_one::<u64>(f.key).map(|v| Value::from(*v)),
             FlagValue::Switch => matches.get_flag(f.key).then_some(Value::Bool(true)),
             FlagValue::Choice(_) | FlagValue::Text => matches
                 .get_one::<String>(f.key)

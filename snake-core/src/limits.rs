@@ -41,6 +41,23 @@ pub const MAX_RUN_SECONDS: f64 = 3600.0;
 /// 10-joint snake logged at every 1/240 s physics step (more in the viewer's memory).
 pub const MAX_RECORDING_SECONDS: f64 = 600.0;
 
+/// Most values in a model's observation or action (a snake of `MAX_JOINTS` joints has about 1000): a
+/// model file that declares more is refused before anything is allocated for it.
+pub const MAX_SPACE_SIZE: usize = 1 << 16;
+
+/// Most frames of a replay animation (`snakesim replay --out x.gif`): frames are held in memory until
+/// the file is written.
+pub const MAX_REPLAY_FRAMES: u64 = 600;
+
+/// Frame rates of a replay animation, frames per second.
+pub const REPLAY_FPS: (f64, f64) = (0.1, 50.0);
+
+/// Most moments in a replay figure (`--panels`).
+pub const MAX_REPLAY_PANELS: u64 = 24;
+
+/// Most episodes in one Rerun recording of an agent (`snakesim replay --episodes`).
+pub const MAX_RECORDING_EPISODES: u64 = 100;
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {

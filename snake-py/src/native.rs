@@ -539,5 +539,16 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("threads", run::MAX_THREADS)?;
     d.set_item("seed", run::MAX_SEED)?;
     d.set_item("bench_seconds", run::MAX_BENCH_SECONDS)?;
+    d.set_item("space_size", core::MAX_SPACE_SIZE)?;
+    d.set_item("replay_frames", core::MAX_REPLAY_FRAMES)?;
+    d.set_item("replay_fps_min", core::REPLAY_FPS.0)?;
+    d.set_item("replay_fps_max", core::REPLAY_FPS.1)?;
+    d.set_item("replay_panels", core::MAX_REPLAY_PANELS)?;
+    d.set_item("recording_episodes", core::MAX_RECORDING_EPISODES)?;
+    d.set_item("sweep_seeds", run::MAX_SWEEP_SEEDS)?;
+    d.set_item("sweep_trials", run::MAX_SWEEP_TRIALS)?;
+    d.set_item("grid_values", run::MAX_GRID_VALUES)?;
+    d.set_item("trial_failures", run::MAX_TRIAL_FAILURES)?;
+    d.set_item("search_keys", run::MAX_SEARCH_KEYS)?;
     Ok(d)
 }

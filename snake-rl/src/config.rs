@@ -52,6 +52,16 @@ pub mod limits {
     pub const MAX_SEED: u64 = u32::MAX as u64;
     /// Longest throughput measurement, seconds.
     pub const MAX_BENCH_SECONDS: f64 = 3600.0;
+    /// Most training seeds of one sweep (`snakesim sweep --seeds`).
+    pub const MAX_SWEEP_SEEDS: u64 = 1000;
+    /// Most trials of one sweep or search.
+    pub const MAX_SWEEP_TRIALS: u64 = 10_000;
+    /// Most values of one `--grid` key or one search choice.
+    pub const MAX_GRID_VALUES: u64 = 1000;
+    /// Most retries of a failed trial (`--max-failures`).
+    pub const MAX_TRIAL_FAILURES: u64 = 100;
+    /// Most keys of a search space.
+    pub const MAX_SEARCH_KEYS: u64 = 100;
 }
 
 /// Which implementation of PPO trains the run.

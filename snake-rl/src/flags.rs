@@ -8,14 +8,20 @@ use std::path::PathBuf;
 
 use serde_json::{json, Value};
 
-use crate::config::{RunConfig, TrainerKind, EVAL_SEED_OFFSET};
+use crate::config::{limits, RunConfig, TrainerKind, EVAL_SEED_OFFSET};
 use crate::nn::Arch;
 
 /// What a flag takes.
 #[derive(Debug, Clone, Copy)]
 pub enum FlagValue {
-    /// A whole number `>= 0` (underscores allowed, as `20_000_000`).
-    Integer,
+    /// A whole number in `[min, max]` (underscores allowed, as `20_000_000`); the configuration checks
+    /// the rest of its range, naming the key.
+    Integer {
+        /// Smallest value the flag takes.
+        min: u64,
+        /// Largest, where the command line checks it.
+        max: Option<u64>,
+    },
     /// One of the names the function gives.
     Choice(fn() -> Vec<&'static str>),
     /// Present or absent: present sets the key to `true`.
@@ -49,6 +55,11 @@ fn presets() -> Vec<&'static str> {
     snake_core::Preset::ALL.iter().map(|p| p.name()).collect()
 }
 
+/// A whole number of at least `min`.
+const fn at_least(min: u64) -> FlagValue {
+    FlagValue::Integer { min, max: None }
+}
+
 const fn flag(key: &'static str, value: FlagValue, about: &'static str) -> Flag {
     Flag {
         key,
@@ -69,34 +80,33 @@ pub const FLAGS: &[Flag] = &[
             "native: snake-rl, the whole loop in Rust; sb3: Stable-Baselines3",
         )
     },
-    flag("joints", FlagValue::Integer, "Snake joints"),
+    flag("joints", at_least(1), "Snake joints"),
     flag(
         "arch",
         FlagValue::Choice(archs),
         "Network: small (pi/vf [64, 64]) or large (shared [128, 128] first)",
     ),
     flag("preset", FlagValue::Choice(presets), "Robot preset"),
-    flag("timesteps", FlagValue::Integer, "Total timesteps"),
-    flag("n_envs", FlagValue::Integer, "Parallel envs"),
-    flag("seed", FlagValue::Integer, "Seed"),
+    flag("timesteps", at_least(1), "Total timesteps"),
+    flag("n_envs", at_least(1), "Parallel envs"),
+    flag(
+        "seed",
+        FlagValue::Integer {
+            min: 0,
+            max: Some(limits::MAX_SEED),
+        },
+        "Seed",
+    ),
     flag(
         "eval_freq",
-        FlagValue::Integer,
+        at_least(0),
         "Evaluate every N timesteps; 0: at the end only",
     ),
-    flag(
-        "eval_episodes",
-        FlagValue::Integer,
-        "Episodes per evaluation",
-    ),
-    flag(
-        "eval_seed",
-        FlagValue::Integer,
-        "Seed of the evaluation episodes",
-    ),
+    flag("eval_episodes", at_least(1), "Episodes per evaluation"),
+    flag("eval_seed", at_least(0), "Seed of the evaluation episodes"),
     flag(
         "checkpoint_freq",
-        FlagValue::Integer,
+        at_least(0),
         "Checkpoint every N timesteps; 0: only the final one",
     ),
     flag(
@@ -106,7 +116,7 @@ pub const FLAGS: &[Flag] = &[
     ),
     flag(
         "threads",
-        FlagValue::Integer,
+        at_least(1),
         "Native trainer: threads for the envs and the updates",
     ),
     Flag {
@@ -121,7 +131,7 @@ pub const FLAGS: &[Flag] = &[
         sb3_only: true,
         ..flag(
             "torch_threads",
-            FlagValue::Integer,
+            at_least(1),
             "SB3 trainer: torch CPU threads",
         )
     },
@@ -149,28 +159,37 @@ impl Flag {
 
     /// The flag as data, for the Python command line: key, flag, value kind, choices, help.
     pub fn describe(&self) -> Value {
-        let (kind, choices) = match self.value {
-            FlagValue::Integer => ("integer", vec![]),
-            FlagValue::Choice(names) => ("choice", names()),
-            FlagValue::Switch => ("switch", vec![]),
-            FlagValue::Text => ("text", vec![]),
+        let (kind, choices, range) = match self.value {
+            FlagValue::Integer { min, max } => ("integer", vec![], json!([min, max])),
+            FlagValue::Choice(names) => ("choice", names(), Value::Null),
+            FlagValue::Switch => ("switch", vec![], Value::Null),
+            FlagValue::Text => ("text", vec![], Value::Null),
         };
         json!({
             "key": self.key,
             "flag": self.name(),
             "value": kind,
             "choices": choices,
+            "range": range,
             "help": self.help(),
             "sb3_only": self.sb3_only,
         })
     }
 }
 
-/// A whole number as the command line writes it (`20000000`, `20_000_000`).
-pub fn parse_integer(text: &str) -> Result<u64, String> {
-    text.replace('_', "")
+/// A whole number as the command line writes it (`20000000`, `20_000_000`), in `[min, max]`.
+pub fn parse_integer(text: &str, min: u64, max: Option<u64>) -> Result<u64, String> {
+    let value: u64 = text
+        .replace('_', "")
         .parse()
-        .map_err(|_| format!("expected a whole number >= 0, got '{text}'"))
+        .map_err(|_| format!("expected an integer, got '{text}'"))?;
+    if value < min {
+        return Err(format!("expected an integer >= {min}, got {value}"));
+    }
+    match max {
+        Some(max) if value > max => Err(format!("expected an integer <= {max}, got {value}")),
+        _ => Ok(value),
+    }
 }
 
 /// Where a run goes when no `--run-dir` is given: `runs/ppo-ARCH-JOINTS-PRESET-seedSEED`, the same
@@ -196,7 +215,7 @@ mod tests {
                 f.key
             );
             let value = match f.value {
-                FlagValue::Integer => json!(2),
+                FlagValue::Integer { .. } => json!(2),
                 FlagValue::Choice(names) => json!(names()[0]),
                 FlagValue::Switch => json!(true),
                 FlagValue::Text => json!("cpu"),
@@ -219,7 +238,11 @@ mod tests {
             by_key("normalize"),
             "Normalise observations and rewards (SB3's VecNormalize) (default off)"
         );
-        assert_eq!(parse_integer("20_000_000"), Ok(20_000_000));
-        assert!(parse_integer("-1").is_err());
+        assert_eq!(parse_integer("20_000_000", 1, None), Ok(20_000_000));
+        assert!(parse_integer("-1", 0, None).is_err());
+        assert_eq!(
+            parse_integer("4294967296", 0, Some(limits::MAX_SEED)),
+            Err("expected an integer <= 4294967295, got 4294967296".into())
+        );
     }
 }

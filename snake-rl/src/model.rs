@@ -414,7 +414,8 @@ impl<'a> Parsed<'a> {
                 config.action_dim()
             )));
         }
-        if obs_dim == 0 || obs_dim > 1 << 16 || act_dim == 0 || act_dim > 1 << 16 {
+        let space = 1..=snake_core::limits::MAX_SPACE_SIZE;
+        if !space.contains(&obs_dim) || !space.contains(&act_dim) {
             return Err(self.error(format!(
                 "implausible sizes obs_dim {obs_dim}, act_dim {act_dim}"
             )));

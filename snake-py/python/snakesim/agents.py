@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from snakesim import extras, runconfig
-from snakesim.config import ENV_DEFAULTS
+from snakesim.config import ENV_DEFAULTS, LIMITS
 
 MODEL_FILE = "model.zip"
 NATIVE_MODEL_FILE = "model.safetensors"
@@ -120,7 +120,7 @@ def _first_line(error: BaseException, limit: int = 160) -> str:
 
 
 # Largest observation or action length a model may declare (a snake of MAX_JOINTS joints has ~1000).
-_MAX_SPACE_SIZE = 1 << 16
+_MAX_SPACE_SIZE = LIMITS["space_size"]
 
 
 def load_normalizer(path: str | os.PathLike):

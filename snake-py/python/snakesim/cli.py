@@ -440,7 +440,7 @@ def build_parser() -> argparse.ArgumentParser:
         kind = flag["value"]
         options: dict[str, Any] = {"dest": flag["key"], "default": S, "help": flag["help"]}
         if kind == "integer":
-            options["type"] = _count  # the configuration checks the range, naming the key
+            options["type"] = _int_at_least(*flag["range"])  # the configuration checks the rest
         elif kind == "choice":
             options["choices"] = flag["choices"]
         elif kind == "switch":
@@ -579,7 +579,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="the deterministic policy (default: sample, as the paper's snake.py test)",
     )
     p.add_argument(
-        "--panels", type=_int_at_least(1, 24), default=7, help="moments in the figure (1-24, default 7)"
+        "--panels",
+        type=_int_at_least(1, LIMITS["replay_panels"]),
+        default=7,
+        help=f"moments in the figure (1-{LIMITS['replay_panels']}, default 7)",
     )
     p.add_argument(
         "--fps", type=_seconds, default=10.0, help="animation frames per simulated second (default 10)"

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from snakesim.config import LIMITS
 from snakesim.render import _yaw
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
@@ -261,9 +262,9 @@ def draw_strip(
 
 
 #: Most frames of an animation (each frame is held in memory until the file is written: ~0.7 MB).
-MAX_FRAMES = 600
+MAX_FRAMES = LIMITS["replay_frames"]
 #: Range of an animation's frames per simulated second (a GIF shows at most 50 frames a second).
-FPS_RANGE = (0.1, 50.0)
+FPS_RANGE = (LIMITS["replay_fps_min"], LIMITS["replay_fps_max"])
 
 
 def check_fps(fps: float) -> None:

@@ -10,12 +10,13 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from snakesim.config import LIMITS
 from snakesim.rerun_log import MAX_SECONDS, RecordingError
 
 DEFAULT_WEB_PORT = 9090
 DEFAULT_GRPC_PORT = 9876
 #: Most episodes of one replay recording.
-MAX_EPISODES = 100
+MAX_EPISODES = LIMITS["recording_episodes"]
 
 
 def _port(text: str) -> int:

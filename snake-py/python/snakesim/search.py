@@ -25,13 +25,14 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import extras, runconfig, sweep
+from snakesim.config import LIMITS
 from snakesim.files import write_atomically
 
 DISTRIBUTIONS = ("uniform", "loguniform", "randint", "choice")
 METRICS = ("success_rate", "mean_return")
 BEST_FILE = "best.yaml"
 #: Most keys in a space.
-MAX_SPACE_KEYS = 100
+MAX_SPACE_KEYS = LIMITS["search_keys"]
 #: ASHA lets every trial train this share of the timesteps before it may stop it.
 GRACE_SHARE = 0.25
 ASHA_REDUCTION_FACTOR = 3

@@ -37,12 +37,12 @@ MANIFEST_VERSION = 1
 TRIALS_DIR = "trials"
 TUNE_DIR = "tune"
 #: Most seeds per config and grid point, and most trials in one sweep.
-MAX_SEEDS = 1000
-MAX_TRIALS = 10_000
+MAX_SEEDS = LIMITS["sweep_seeds"]
+MAX_TRIALS = LIMITS["sweep_trials"]
 #: Most values of one ``--grid`` key.
-MAX_GRID_VALUES = 1000
+MAX_GRID_VALUES = LIMITS["grid_values"]
 #: Most retries of a failed trial (``--max-failures``), and the default.
-MAX_FAILURES = 100
+MAX_FAILURES = LIMITS["trial_failures"]
 DEFAULT_MAX_FAILURES = 2
 #: CPUs Ray reserves for each trial (``--cpus-per-trial``) unless told otherwise.
 DEFAULT_CPUS_PER_TRIAL = 1
