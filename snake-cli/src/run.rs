@@ -34,7 +34,8 @@ pub struct RunArgs {
     /// YAML robot file around one (anisotropic friction, motor gains, start pose; see robots/).
     #[arg(long)]
     pub robot: Option<PathBuf>,
-    /// Gait: sine (pybullet's snake.py lateral undulation), on every movable joint in joint order.
+    /// Gait: sine (pybullet's snake.py lateral undulation), on every actuated joint (URDF effort > 0)
+    /// in joint order; a robot file may set the wave's parameters.
     #[arg(long, default_value = "sine")]
     pub gait: GaitKind,
     /// Joint targets from a CSV instead of the gait (--robot only): header step,<joint names> (any
@@ -286,8 +287,12 @@ impl RunPlan {
                         args.seconds
                     );
                 }
+                let base = match &body {
+                    BodyPlan::Robot(spec) => spec.gait.clone().unwrap_or_default(),
+                    BodyPlan::Cubes { .. } => LateralUndulation::default(),
+                };
                 let mut gait = match args.gait {
-                    GaitKind::Sine => LateralUndulation::default().with_steering(args.steer),
+                    GaitKind::Sine => base.with_steering(args.steer),
                 };
                 gait.dt = config_dt;
                 gait.validate()?;
@@ -414,10 +419,21 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
         Drive::Gait(g) => Some(g.clone()),
         Drive::Targets { .. } => None,
     };
+    // The gait's wave runs over the actuated joints; passive ones (effort 0) keep target 0.
+    let actuated = match &plan.body {
+        BodyPlan::Cubes { config, .. } => (0..config.joints).collect(),
+        BodyPlan::Robot(spec) => spec.actuated_joints(),
+    };
+    let mut wave = vec![0.0; actuated.len()];
     let clock = Instant::now();
     for step in 1..=steps {
         match (&mut gait, &plan.drive) {
-            (Some(g), _) => g.next_targets(&mut targets),
+            (Some(g), _) => {
+                g.next_targets(&mut wave);
+                for (&j, &v) in actuated.iter().zip(&wave) {
+                    targets[j] = v;
+                }
+            }
             (None, Drive::Targets { table, .. }) => {
                 targets.copy_from_slice(&table.rows[(step - 1) as usize])
             }

@@ -24,6 +24,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Error, Result};
+use crate::gait::LateralUndulation;
 use crate::limits::MAX_URDF_BYTES;
 use crate::math::StartPose;
 use crate::urdf::{InertiaSource, UrdfRobot};
@@ -72,6 +73,7 @@ pub struct LinkSettings {
 /// anisotropic_friction: [1, 0.01, 0.01]   # every link, in its own frame
 /// links:                           # per link, by URDF name
 ///   head: {anisotropic_friction: [1, 1, 1]}
+/// gait: {segment_length: 0.0635, wave_length: 0.5, amplitude: 0.6}   # the sine gait's wave
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -93,6 +95,9 @@ pub struct RobotFile {
     /// Per-link settings by URDF link name.
     #[serde(default)]
     pub links: BTreeMap<String, LinkSettings>,
+    /// Parameters of the sine gait (`--gait sine`) for this robot; left out, pybullet's snake.py wave.
+    #[serde(default)]
+    pub gait: Option<LateralUndulation>,
 }
 
 /// Everything needed to build a [`Robot`].
@@ -110,6 +115,8 @@ pub struct RobotSpec {
     pub start: Option<StartPose>,
     /// The file it was read from.
     pub source: PathBuf,
+    /// The sine gait's parameters for this robot (snake.py's when `None`).
+    pub gait: Option<LateralUndulation>,
 }
 
 fn check_friction(file: &str, key: &str, a: [f64; 3]) -> Result<()> {
@@ -145,6 +152,7 @@ impl RobotSpec {
             anisotropic_friction: vec![None; n],
             start: None,
             source: path.to_path_buf(),
+            gait: None,
         })
     }
 
@@ -196,6 +204,10 @@ impl RobotSpec {
             )?;
             friction[k] = Some(settings.anisotropic_friction);
         }
+        if let Some(g) = &file.gait {
+            g.validate()
+                .map_err(|e| invalid(format!("{shown}: gait: {e}")))?;
+        }
         let start = file
             .start
             .map(|[x, y, z, yaw]| {
@@ -212,6 +224,7 @@ impl RobotSpec {
             anisotropic_friction: friction,
             start,
             source: path.to_path_buf(),
+            gait: file.gait,
         })
     }
 
@@ -221,6 +234,19 @@ impl RobotSpec {
             .movable_joints()
             .into_iter()
             .map(|j| self.urdf.joint(j).expect("movable joint").name.as_str())
+            .collect()
+    }
+
+    /// Positions, among the movable joints, of the actuated ones (URDF effort > 0); a joint of effort 0
+    /// (a passive wheel) is driven with force 0, which leaves it free. The gait's wave runs over the
+    /// actuated joints in order.
+    pub fn actuated_joints(&self) -> Vec<usize> {
+        self.urdf
+            .movable_joints()
+            .into_iter()
+            .enumerate()
+            .filter(|(_, j)| self.urdf.joint(*j).expect("movable joint").effort > 0.0)
+            .map(|(k, _)| k)
             .collect()
     }
 
