@@ -13,8 +13,8 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::urdf::Geometry;
 use snake_core::{
-    Gait, GaitKind, InertiaSource, LateralUndulation, Preset, Robot, RobotSpec, Simulation, Snake,
-    SnakeConfig, StartPose,
+    Gait, GaitKind, InertiaSource, LateralUndulation, Preset, Robot, RobotGait, RobotSpec,
+    Simulation, Snake, SnakeConfig, StartPose,
 };
 
 use crate::output::{check_distinct, say, OutputFile};
@@ -415,25 +415,16 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
     let steps = plan.steps;
     let snapshot_every = (steps / 4).max(1);
     let mut targets = vec![0.0; joints];
-    let mut gait = match &plan.drive {
-        Drive::Gait(g) => Some(g.clone()),
-        Drive::Targets { .. } => None,
-    };
     // The gait's wave runs over the actuated joints; passive ones (effort 0) keep target 0.
-    let actuated = match &plan.body {
-        BodyPlan::Cubes { config, .. } => (0..config.joints).collect(),
-        BodyPlan::Robot(spec) => spec.actuated_joints(),
+    let mut gait: Option<Box<dyn Gait>> = match (&plan.drive, &plan.body) {
+        (Drive::Gait(g), BodyPlan::Cubes { .. }) => Some(Box::new(g.clone())),
+        (Drive::Gait(g), BodyPlan::Robot(spec)) => Some(Box::new(RobotGait::new(g.clone(), spec))),
+        (Drive::Targets { .. }, _) => None,
     };
-    let mut wave = vec![0.0; actuated.len()];
     let clock = Instant::now();
     for step in 1..=steps {
         match (&mut gait, &plan.drive) {
-            (Some(g), _) => {
-                g.next_targets(&mut wave);
-                for (&j, &v) in actuated.iter().zip(&wave) {
-                    targets[j] = v;
-                }
-            }
+            (Some(g), _) => g.next_targets(&mut targets),
             (None, Drive::Targets { table, .. }) => {
                 targets.copy_from_slice(&table.rows[(step - 1) as usize])
             }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use serde::Serialize;
-use snake_core::{Gait, InertiaSource, RobotSpec};
+use snake_core::{Gait, InertiaSource, RobotGait, RobotSpec};
 use snakesim_tests::{assert_identical, read_csv, repo_root, run_reference_script};
 
 fn snake_cli(args: &[&str]) -> Output {
@@ -41,17 +41,12 @@ struct UrdfScenario {
 /// The targets `snake-cli run --gait sine` sets on a robot: the robot file's wave over the actuated
 /// joints, 0 on passive ones.
 fn gait_targets(spec: &RobotSpec, steps: usize) -> Vec<Vec<f64>> {
-    let mut gait = spec.gait.clone().unwrap_or_default();
-    let actuated = spec.actuated_joints();
+    let mut gait = RobotGait::new(spec.gait.clone().unwrap_or_default(), spec);
     let m = spec.urdf.movable_joints().len();
-    let mut wave = vec![0.0; actuated.len()];
     (0..steps)
         .map(|_| {
-            gait.next_targets(&mut wave);
             let mut row = vec![0.0; m];
-            for (&j, &v) in actuated.iter().zip(&wave) {
-                row[j] = v;
-            }
+            gait.next_targets(&mut row);
             row
         })
         .collect()
@@ -366,4 +361,30 @@ fn bad_robots_are_one_line_and_write_nothing() {
         assert!(!output.exists(), "{args:?} wrote {}", output.display());
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `snake-cli bench --robot` measures a robot on its gait.
+#[test]
+fn bench_measures_a_robot() {
+    let file = robot("wheeled-8.yaml");
+    let out = snake_cli(&[
+        "bench",
+        "--robot",
+        file.to_str().unwrap(),
+        "--steps",
+        "240",
+        "--repeats",
+        "1",
+        "--no-reference",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("wheeled-8 (24 links, 23 movable joints)"),
+        "{text}"
+    );
 }

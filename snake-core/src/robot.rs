@@ -24,7 +24,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Error, Result};
-use crate::gait::LateralUndulation;
+use crate::gait::{Gait, LateralUndulation};
 use crate::limits::MAX_URDF_BYTES;
 use crate::math::StartPose;
 use crate::urdf::{InertiaSource, UrdfRobot};
@@ -258,6 +258,41 @@ impl RobotSpec {
             z: 0.0,
             yaw: 0.0,
         })
+    }
+}
+
+/// A gait on a robot's joints: the gait's wave over the actuated joints (URDF effort > 0) in order,
+/// target 0 on the passive ones. This is what `snake-cli run --robot ... --gait sine` sets.
+#[derive(Debug, Clone)]
+pub struct RobotGait<G> {
+    gait: G,
+    actuated: Vec<usize>,
+    wave: Vec<f64>,
+}
+
+impl<G: Gait> RobotGait<G> {
+    /// `gait` on `spec`'s actuated joints.
+    pub fn new(gait: G, spec: &RobotSpec) -> Self {
+        let actuated = spec.actuated_joints();
+        RobotGait {
+            gait,
+            wave: vec![0.0; actuated.len()],
+            actuated,
+        }
+    }
+}
+
+impl<G: Gait> Gait for RobotGait<G> {
+    /// `targets` holds one value per movable joint.
+    fn next_targets(&mut self, targets: &mut [f64]) {
+        self.gait.next_targets(&mut self.wave);
+        for (&j, &v) in self.actuated.iter().zip(&self.wave) {
+            targets[j] = v;
+        }
+    }
+
+    fn reset(&mut self) {
+        self.gait.reset();
     }
 }
 

@@ -33,29 +33,36 @@ from pybullet_utils import bullet_client
 DT = 1.0 / 240.0
 
 
+def load(client, scenario):
+    """The plane, the robot, gravity and friction as the scenario says; returns the robot, its movable
+    joints, their forces (URDF efforts), the gains and the targets."""
+    client.createMultiBody(0, client.createCollisionShape(p.GEOM_PLANE))
+    x, y, z, yaw = scenario["start"]
+    flags = p.URDF_USE_INERTIA_FROM_FILE if scenario.get("inertia") == "file" else 0
+    robot = client.loadURDF(
+        scenario["urdf"], [x, y, z], client.getQuaternionFromEuler([0, 0, yaw]), flags=flags
+    )
+    client.setGravity(0, 0, -9.81)
+    for link, friction in scenario.get("friction", []):
+        client.changeDynamics(robot, link, anisotropicFriction=friction)
+    movable = []
+    forces = []
+    for j in range(client.getNumJoints(robot)):
+        info = client.getJointInfo(robot, j)
+        if info[2] in (p.JOINT_REVOLUTE, p.JOINT_PRISMATIC):
+            movable.append(j)
+            forces.append(info[10])
+    kp, kd = scenario.get("kp", 0.1), scenario.get("kd", 1.0)
+    with open(scenario["targets"]) as f:
+        targets = [[float(v) for v in row] for row in csv.reader(f)]
+    return robot, movable, forces, kp, kd, targets
+
+
 def run(scenario, out_path):
     client = bullet_client.BulletClient(connection_mode=p.DIRECT)
     try:
-        client.createMultiBody(0, client.createCollisionShape(p.GEOM_PLANE))
-        x, y, z, yaw = scenario["start"]
-        flags = p.URDF_USE_INERTIA_FROM_FILE if scenario.get("inertia") == "file" else 0
-        robot = client.loadURDF(
-            scenario["urdf"], [x, y, z], client.getQuaternionFromEuler([0, 0, yaw]), flags=flags
-        )
-        client.setGravity(0, 0, -9.81)
-        for link, friction in scenario.get("friction", []):
-            client.changeDynamics(robot, link, anisotropicFriction=friction)
-        movable = []
-        forces = []
-        for j in range(client.getNumJoints(robot)):
-            info = client.getJointInfo(robot, j)
-            if info[2] in (p.JOINT_REVOLUTE, p.JOINT_PRISMATIC):
-                movable.append(j)
-                forces.append(info[10])
+        robot, movable, forces, kp, kd, targets = load(client, scenario)
         m = len(movable)
-        kp, kd = scenario.get("kp", 0.1), scenario.get("kd", 1.0)
-        with open(scenario["targets"]) as f:
-            targets = [[float(v) for v in row] for row in csv.reader(f)]
         header = ["step", "t", "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw"]
         header += [f"q{j}" for j in range(m)]
         header += ["vx", "vy", "vz", "wx", "wy", "wz"]
