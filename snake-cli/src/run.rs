@@ -262,6 +262,7 @@ impl RunPlan {
                 if let Some(inertia) = args.inertia {
                     spec.inertia = inertia;
                 }
+                spec.urdf.check_inertia(spec.inertia)?;
                 BodyPlan::Robot(Box::new(spec))
             }
         };

@@ -259,12 +259,15 @@ fn bad_robots_are_one_line_and_write_nothing() {
         format!("<joint name='{p}{c}' type='fixed'><parent link='{p}'/><child link='{c}'/></joint>")
     };
     let urdf = |body: String| format!("<robot name='r'>{body}</robot>");
+    let ball = |n: &str| {
+        format!("<link name='{n}'><collision><geometry><sphere radius='0.1'/></geometry></collision></link>")
+    };
     let good = write(
         "good.urdf",
         &urdf(format!(
             "{}{}<joint name='j' type='continuous'><parent link='a'/><child link='b'/><limit effort='1'/></joint>",
-            link("a"),
-            link("b")
+            ball("a"),
+            ball("b")
         )),
     );
     let cases: Vec<(Vec<String>, String)> = vec![
@@ -340,6 +343,25 @@ fn bad_robots_are_one_line_and_write_nothing() {
             "column 'k' is not a movable joint".into(),
         ),
         (vec![write("robot.txt", "x")], "a robot is a .urdf file".into()),
+        (
+            vec![
+                write(
+                    "flat.urdf",
+                    &urdf(
+                        "<link name='a'><inertial><mass value='1'/><inertia ixx='1' iyy='1' izz='3'/></inertial>\
+                         <collision><geometry><sphere radius='0.1'/></geometry></collision></link>"
+                            .into(),
+                    ),
+                ),
+                "--inertia".into(),
+                "file".into(),
+            ],
+            "flat.urdf: <link name=\"a\"> (root link): <inertia> has principal moments".into(),
+        ),
+        (
+            vec![write("noshape.urdf", &urdf(link("a")))],
+            "has mass but no collision shape".into(),
+        ),
         (vec![good.clone(), "--anisotropic-friction".into(), "1,-1,1".into()], "anisotropic friction".into()),
         (vec![good.clone(), "--trace".into(), "t.csv".into()], "cannot be used with".into()),
     ];

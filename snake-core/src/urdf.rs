@@ -261,6 +261,58 @@ impl UrdfRobot {
         self.links.get(j + 1).and_then(|l| l.joint.as_ref())
     }
 
+    /// Checks that every link Bullet will move gets an inertia it can take: the root (when it has mass)
+    /// and every link on a revolute or continuous joint need positive principal moments. With
+    /// [`InertiaSource::File`] they are the `<inertia>` tensor's (pybullet sets a tensor that breaks the
+    /// triangle inequality to zero); with [`InertiaSource::Shapes`] a link with mass needs a collision
+    /// shape (an empty compound has zero inertia).
+    pub fn check_inertia(&self, source: InertiaSource) -> Result<()> {
+        for (k, link) in self.links.iter().enumerate() {
+            let rotating = match &link.joint {
+                None => link.inertial.map_or(true, |i| i.mass > 0.0),
+                Some(j) => matches!(j.kind, JointKind::Revolute | JointKind::Continuous),
+            };
+            if !rotating {
+                continue;
+            }
+            let problem = match source {
+                InertiaSource::Shapes if link.collisions.is_empty() => Some(
+                    "has mass but no collision shape, so its inertia from the shapes is zero \
+                          (give it a shape, or use the file's inertia)"
+                        .to_owned(),
+                ),
+                InertiaSource::Shapes => None,
+                InertiaSource::File => {
+                    let i = link
+                        .inertial
+                        .map_or([1.0, 0.0, 0.0, 1.0, 0.0, 1.0], |i| i.inertia);
+                    let m = nalgebra::Matrix3::new(
+                        i[0], i[1], i[2], i[1], i[3], i[4], i[2], i[4], i[5],
+                    );
+                    let e = nalgebra::SymmetricEigen::new(m).eigenvalues;
+                    let (a, b, c) = (e[0], e[1], e[2]);
+                    let bad =
+                        !(a > 0.0 && b > 0.0 && c > 0.0) || a > b + c || b > a + c || c > a + b;
+                    bad.then(|| {
+                        format!(
+                            "<inertia> has principal moments ({a:e}, {b:e}, {c:e}): each must be \
+                             positive and at most the sum of the other two"
+                        )
+                    })
+                }
+            };
+            if let Some(problem) = problem {
+                let what = if k == 0 { "root link" } else { "link" };
+                return Err(invalid(format!(
+                    "{}: <link name=\"{}\"> ({what}): {problem}",
+                    self.shown(),
+                    link.name
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// Name of the file (or of the text) for messages.
     pub fn shown(&self) -> String {
         self.source

@@ -333,6 +333,7 @@ impl World {
     ) -> Result<BodyId> {
         finite(&position, "base position")?;
         finite(&orientation, "base orientation")?;
+        robot.check_inertia(inertia)?;
         let origin = |o: &Origin| bullet_sys::ss_urdf_origin {
             xyz: o.xyz,
             rpy: o.rpy.unwrap_or([0.0; 3]),
