@@ -393,3 +393,79 @@ fn random_robots_both_inertia_modes() {
 fn rigid_robots_of_fixed_joints() {
     check_random("fixed", 7, 3, Mix::AllFixed, TEN_SECONDS);
 }
+
+/// The env on `robots/paper-cubes-5.yaml` is the built-in 5-joint env: the same observations, rewards
+/// and flags, bit for bit, under the same random actions (both layouts, the physics trace on).
+#[test]
+fn env_on_the_paper_robot_file_is_the_built_in_env() {
+    use snake_core::env::ObservationLayout;
+    use snake_core::robot::RobotRef;
+    use snake_core::{EnvConfig, ResetOptions, SnakeEnv};
+    let file = snakesim_tests::repo_root().join("robots/paper-cubes-5.yaml");
+    for layout in [ObservationLayout::Paper, ObservationLayout::Extended] {
+        let built_in = EnvConfig {
+            observation: layout,
+            max_episode_steps: 600,
+            ..EnvConfig::default()
+        };
+        let robot = EnvConfig {
+            robot: Some(RobotRef::load(&file).unwrap()),
+            ..built_in.clone()
+        };
+        assert_eq!(robot.observation_dim(), built_in.observation_dim());
+        let (mut a, mut b) = (
+            SnakeEnv::new(built_in).unwrap(),
+            SnakeEnv::new(robot).unwrap(),
+        );
+        b.set_physics_trace(true);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for episode in 0..2 {
+            let (oa, _) = a.reset(Some(episode), ResetOptions::default()).unwrap();
+            let (ob, _) = b.reset(Some(episode), ResetOptions::default()).unwrap();
+            assert_eq!(oa, ob, "reset {episode}");
+            loop {
+                let action: Vec<f32> = (0..5).map(|_| rng.gen_range(-1.0..1.0)).collect();
+                let (sa, sb) = (a.step(&action).unwrap(), b.step(&action).unwrap());
+                let same = sa
+                    .obs
+                    .iter()
+                    .zip(&sb.obs)
+                    .all(|(x, y)| x.to_bits() == y.to_bits());
+                assert!(same, "episode {episode} step {}", sa.info.episode_step);
+                assert_eq!(sa.reward.to_bits(), sb.reward.to_bits());
+                assert_eq!((sa.terminated, sa.truncated), (sb.terminated, sb.truncated));
+                if sa.terminated || sa.truncated {
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// An env on a robot file has one action value per movable joint and one (angle, velocity) pair per
+/// movable joint in the observation; a serialised config names the robot by its path.
+#[test]
+fn env_layouts_follow_the_robot() {
+    use snake_core::{EnvConfig, ResetOptions, SnakeEnv};
+    let file = snakesim_tests::repo_root().join("robots/wheeled-8.yaml");
+    let json = serde_json::json!({"robot": file, "max_episode_steps": 50}).to_string();
+    let config: EnvConfig = serde_json::from_str(&json).unwrap();
+    assert_eq!(config.joints(), 23);
+    assert_eq!(config.action_dim(), 23);
+    assert_eq!(config.observation_dim(), 2 + 2 * 23);
+    let back: EnvConfig = serde_json::from_str(&serde_json::to_string(&config).unwrap()).unwrap();
+    assert_eq!(back, config);
+    let mut env = SnakeEnv::new(config).unwrap();
+    env.set_physics_trace(true);
+    let (obs, _) = env.reset(Some(1), ResetOptions::default()).unwrap();
+    assert_eq!(obs.len(), 48);
+    let step = env.step(&[0.3f32; 23]).unwrap();
+    assert!(step.obs.iter().all(|v| v.is_finite()));
+    let trace = env.physics_trace().unwrap();
+    assert_eq!(trace.poses.len(), 24 * 7, "one pose per link");
+    let bad = serde_json::json!({"robot": "/nonexistent/robot.urdf"}).to_string();
+    let e = serde_json::from_str::<EnvConfig>(&bad)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("/nonexistent/robot.urdf: cannot read"), "{e}");
+}

@@ -19,6 +19,7 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -314,6 +315,15 @@ pub trait Simulation {
     fn step(&mut self) -> Result<()>;
     /// World poses of every body part: the base, then each link.
     fn body_poses(&self) -> Result<Vec<Pose>>;
+    /// Angles, velocities and motor torques of the driven joints (any slice may be empty).
+    fn read_joint_states(
+        &self,
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()>;
+    /// Seconds per physics step.
+    fn dt(&self) -> f64;
 }
 
 impl Simulation for Snake {
@@ -340,6 +350,18 @@ impl Simulation for Snake {
     }
     fn body_poses(&self) -> Result<Vec<Pose>> {
         self.cube_poses()
+    }
+    fn read_joint_states(
+        &self,
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()> {
+        self.world()
+            .read_joints(self.body(), positions, velocities, torques)
+    }
+    fn dt(&self) -> f64 {
+        self.config().dt
     }
 }
 
@@ -414,18 +436,6 @@ impl Robot {
     pub fn movable_joints(&self) -> &[i32] {
         &self.movable
     }
-
-    /// Angles, velocities and motor torques of the movable joints (slices as long as
-    /// [`Simulation::joints`], or empty to skip).
-    pub fn read_joint_states(
-        &self,
-        positions: &mut [f64],
-        velocities: &mut [f64],
-        torques: &mut [f64],
-    ) -> Result<()> {
-        self.world
-            .read_joints_at(self.body, &self.movable, positions, velocities, torques)
-    }
 }
 
 impl Simulation for Robot {
@@ -442,7 +452,7 @@ impl Simulation for Robot {
         self.world.base_state(self.body)
     }
     fn read_joints(&self, positions: &mut [f64], velocities: &mut [f64]) -> Result<()> {
-        self.read_joint_states(positions, velocities, &mut [])
+        Simulation::read_joint_states(self, positions, velocities, &mut [])
     }
     fn set_targets(&mut self, targets: &[f64]) -> Result<()> {
         if targets.len() != self.movable.len() {
@@ -479,5 +489,66 @@ impl Simulation for Robot {
         let mut poses = vec![self.base_state()?.pose];
         poses.extend(self.world.link_poses(self.body)?);
         Ok(poses)
+    }
+    fn read_joint_states(
+        &self,
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()> {
+        self.world
+            .read_joints_at(self.body, &self.movable, positions, velocities, torques)
+    }
+    fn dt(&self) -> f64 {
+        self.dt
+    }
+}
+
+/// A robot named by its file, as an [`EnvConfig`](crate::EnvConfig) holds it: serialised as the path,
+/// loaded (and checked) when deserialised or made with [`RobotRef::load`].
+#[derive(Debug, Clone)]
+pub struct RobotRef {
+    path: PathBuf,
+    spec: Arc<RobotSpec>,
+}
+
+impl RobotRef {
+    /// Reads a robot (`.urdf` or robot file) and checks that it can be built.
+    pub fn load(path: &Path) -> Result<Self> {
+        let spec = RobotSpec::load(path)?;
+        spec.urdf.check_inertia(spec.inertia)?;
+        Ok(RobotRef {
+            path: path.to_path_buf(),
+            spec: Arc::new(spec),
+        })
+    }
+
+    /// The file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The robot.
+    pub fn spec(&self) -> &RobotSpec {
+        &self.spec
+    }
+}
+
+impl PartialEq for RobotRef {
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path && self.spec == other.spec
+    }
+}
+
+impl Serialize for RobotRef {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        self.path.serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for RobotRef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let path = PathBuf::deserialize(d)?;
+        RobotRef::load(&path).map_err(serde::de::Error::custom)
     }
 }
