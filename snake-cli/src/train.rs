@@ -246,12 +246,15 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         );
     }
     let (resolved, resume_from) = trainer::prepare(&config, &run_dir, args.resume)?;
+    let env = resolved.env_config()?;
+    let body = match &env.robot {
+        Some(robot) => format!("robot {} ({} joints)", robot.path().display(), env.joints()),
+        None => format!("{} joints, preset {}", resolved.joints, resolved.preset),
+    };
     say!(
-        "run {}: PPO-{}, {} joints, preset {}, {} timesteps, {} envs, seed {}{}",
+        "run {}: PPO-{}, {body}, {} timesteps, {} envs, seed {}{}",
         run_dir.display(),
         resolved.arch,
-        resolved.joints,
-        resolved.preset,
         resolved.timesteps,
         resolved.n_envs,
         resolved.seed,

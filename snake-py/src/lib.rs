@@ -208,11 +208,12 @@ impl Env {
         ))
     }
 
-    /// Pose of every cube, the head first: an (N + 1, 7) array of x, y, z, qx, qy, qz, qw.
+    /// Pose of every cube (every link of a robot), the head first: an (N + 1, 7) array of x, y, z,
+    /// qx, qy, qz, qw (one row per link for a robot).
     fn cube_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let flat: Option<Result<Vec<f64>, snake_core::Error>> = self.with(py, |env| {
-            env.snake().map(|snake| {
-                snake.cube_poses().map(|poses| {
+            env.simulation().map(|snake| {
+                snake.body_poses().map(|poses| {
                     poses
                         .iter()
                         .flat_map(|p| {
