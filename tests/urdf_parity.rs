@@ -3,7 +3,8 @@
 //! Robots are generated at random (tree shapes, link and joint order shuffled in the file, boxes,
 //! spheres, cylinders and capsules with origins, inertial frames, masses, links without `<inertial>`,
 //! revolute, continuous, prismatic and fixed joints about random axes with rpy origins, limits, damping,
-//! `<contact>` tags, anisotropic friction on some links), dropped onto the plane and driven by random
+//! `<contact>` tags, collision groups and masks, anisotropic friction on some links), dropped onto the
+//! plane and driven by random
 //! joint targets for 10 s. `reference/urdf_reference.py` runs each in pybullet; after every step the base
 //! pose and velocity, every movable joint's angle, velocity and motor torque must have identical bits.
 
@@ -113,9 +114,16 @@ fn random_urdf(rng: &mut ChaCha8Rng, links: usize, mix: Mix) -> String {
                 let rpy = rng.gen_bool(0.5);
                 origin(rng, 0.05, rpy)
             };
+            // Now and then a collision filter: group 2 with mask 1 never meets the plane (static group
+            // 2, mask -3), any other group does.
+            let filter = match rng.gen_range(0..12) {
+                0 => " group=\"2\" mask=\"1\"",
+                1 => " group=\"5\" mask=\"-1\"",
+                _ => "",
+            };
             writeln!(
                 s,
-                "    <collision>{o}<geometry>{geometry}</geometry></collision>"
+                "    <collision{filter}>{o}<geometry>{geometry}</geometry></collision>"
             )
             .unwrap();
         }
