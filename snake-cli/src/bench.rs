@@ -213,28 +213,32 @@ fn bench_robot(args: &BenchArgs, path: &Path) -> Result<()> {
         args.repeats,
         args.steps
     )?;
-    let ours = median(
-        (0..args.repeats)
-            .map(|_| one_robot_run(&spec, &rows))
-            .collect::<Result<_>>()?,
-    );
-    let theirs = if args.no_reference {
+    // Ours and pybullet's runs alternate, so that a load that changes during the benchmark (other
+    // processes on a shared machine) weighs on both alike.
+    let python = if args.no_reference {
         None
     } else {
-        match find_python(args.python.as_deref()) {
-            Some(python) => match pybullet_robot_rates(&python, &spec, &rows, args.repeats) {
-                Ok(v) => Some(median(v)),
+        let found = find_python(args.python.as_deref());
+        if found.is_none() {
+            eprintln!("note: no Python with pybullet found (.venv/bin/python or --python); measuring snakesim only");
+        }
+        found
+    };
+    let (mut ours, mut theirs) = (Vec::new(), python.as_ref().map(|_| Vec::new()));
+    for _ in 0..args.repeats {
+        ours.push(one_robot_run(&spec, &rows)?);
+        if let (Some(python), Some(rates)) = (&python, theirs.as_mut()) {
+            match pybullet_robot_rates(python, &spec, &rows, 1) {
+                Ok(r) => rates.extend(r),
                 Err(e) => {
                     eprintln!("note: pybullet reference not measured: {e:#}");
-                    None
+                    theirs = None;
                 }
-            },
-            None => {
-                eprintln!("note: no Python with pybullet found (.venv/bin/python or --python); measuring snakesim only");
-                None
             }
         }
-    };
+    }
+    let ours = median(ours);
+    let theirs = theirs.filter(|r| !r.is_empty()).map(median);
     say!(
         "{:>16}  {:>16}  {:>7}",
         "snakesim",
