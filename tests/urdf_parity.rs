@@ -57,8 +57,11 @@ fn origin(rng: &mut ChaCha8Rng, reach: f64, rpy: bool) -> String {
 #[derive(Clone, Copy)]
 enum Mix {
     Any,
-    /// Fixed joints only below a moving root: the robot is one rigid body made of several links.
+    /// Fixed joints only below a moving root: the robot is one rigid body made of several links, some
+    /// of them without a collision shape.
     AllFixed,
+    /// A root of mass 0 (a fixed base, as an arm on a table) with any joints below it.
+    FixedBase,
 }
 
 /// A random robot as URDF text, and the target ranges of its movable joints in joint order (which the
@@ -68,7 +71,12 @@ fn random_urdf(rng: &mut ChaCha8Rng, links: usize, mix: Mix) -> String {
     for k in 0..links {
         let mut s = format!("  <link name=\"l{k}\">\n");
         if rng.gen_bool(0.85) || k == 0 {
-            let mass = rng.gen_range(0.05..2.0);
+            let fixed_base = k == 0 && matches!(mix, Mix::FixedBase);
+            let mass = if fixed_base {
+                0.0
+            } else {
+                rng.gen_range(0.05..2.0)
+            };
             let scale = rng.gen_range(0.001..0.02);
             let (a, b, c) = (
                 scale * rng.gen_range(1.0..2.0),
@@ -88,7 +96,9 @@ fn random_urdf(rng: &mut ChaCha8Rng, links: usize, mix: Mix) -> String {
             )
             .unwrap();
         }
-        for _ in 0..rng.gen_range(1..=3) {
+        // A link of a rigid robot may have no shape (its mass and inertia still count).
+        let least = usize::from(!(matches!(mix, Mix::AllFixed) && k > 0));
+        for _ in 0..rng.gen_range(least..=3) {
             let geometry = match rng.gen_range(0..4) {
                 0 => format!(
                     "<box size=\"{:?} {:?} {:?}\"/>",
@@ -184,7 +194,7 @@ fn random_urdf(rng: &mut ChaCha8Rng, links: usize, mix: Mix) -> String {
         let parent = rng.gen_range(0..k);
         let kind = match mix {
             Mix::AllFixed => "fixed",
-            Mix::Any => match rng.gen_range(0..20) {
+            Mix::Any | Mix::FixedBase => match rng.gen_range(0..20) {
                 0..=5 => "revolute",
                 6..=11 => "continuous",
                 12..=14 => "prismatic",
@@ -399,7 +409,12 @@ fn random_robots_both_inertia_modes() {
 
 #[test]
 fn rigid_robots_of_fixed_joints() {
-    check_random("fixed", 7, 3, Mix::AllFixed, TEN_SECONDS);
+    check_random("fixed", 7, 4, Mix::AllFixed, TEN_SECONDS);
+}
+
+#[test]
+fn robots_on_a_fixed_base() {
+    check_random("base", 11, 3, Mix::FixedBase, TEN_SECONDS);
 }
 
 /// The env on `robots/paper-cubes-5.yaml` is the built-in 5-joint env: the same observations, rewards
