@@ -889,6 +889,37 @@ int ss_get_link_poses(const ss_world* w, int body, int count, double* poses) {
     SS_GUARD_END
 }
 
+int ss_get_shape_poses(const ss_world* w, int body, int link, double* poses, int capacity, int* count_out) {
+    if (!w || !count_out || (capacity > 0 && !poses)) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    SS_GUARD_BEGIN
+    const btCollisionObject* col = link == -1 ? (const btCollisionObject*)mb->getBaseCollider()
+                                              : (const btCollisionObject*)mb->getLinkCollider(link);
+    auto put = [&](int k, const btTransform& tr) {
+        if (k >= capacity) return;
+        btQuaternion q = tr.getRotation();
+        for (int i = 0; i < 3; ++i) poses[7 * k + i] = tr.getOrigin()[i];
+        for (int i = 0; i < 4; ++i) poses[7 * k + 3 + i] = q[i];
+    };
+    int count = 0;
+    if (col) {
+        const btCollisionShape* shape = col->getCollisionShape();
+        if (shape->getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
+            const btCompoundShape* compound = static_cast<const btCompoundShape*>(shape);
+            count = compound->getNumChildShapes();
+            for (int k = 0; k < count; ++k) put(k, compound->getChildTransform(k));
+        } else {
+            count = 1;
+            put(0, btTransform::getIdentity());
+        }
+    }
+    *count_out = count;
+    return SS_OK;
+    SS_GUARD_END
+}
+
 int ss_get_contacts(const ss_world* w, int body, ss_contact* out, int capacity, int* count_out) {
     if (!w || !count_out || (capacity > 0 && !out)) return fail(SS_ERR_NULL, "null argument");
     btMultiBody* mb = w->body(body);

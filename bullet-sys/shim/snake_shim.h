@@ -203,6 +203,10 @@ int ss_get_joint_states_at(const ss_world* world, int body, int count, const int
                            double* velocities, double* applied_torques);
 /* World pose of each link's COM frame, 7 values (x, y, z, qx, qy, qz, qw) per link 0..count-1. */
 int ss_get_link_poses(const ss_world* world, int body, int count, double* poses);
+/* Poses of the collision shapes of link `link` (-1: the base) in its centre-of-mass frame, 7 values
+ * each (x, y, z, qx, qy, qz, qw), in the order of the URDF's <collision> elements; *count_out is their
+ * number (one identity pose when the importer used the single shape directly). */
+int ss_get_shape_poses(const ss_world* world, int body, int link, double* poses, int capacity, int* count_out);
 /* Contact points of the last step that involve `body`, up to `capacity`; *count_out is the total. */
 int ss_get_contacts(const ss_world* world, int body, ss_contact* out, int capacity, int* count_out);
 

@@ -72,15 +72,15 @@ pub struct RunArgs {
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Write the full state after every physics step (cube poses, joint angles, velocities, torques,
-    /// targets) as CSV: the physics trace that `snakesim convert` turns into a Rerun recording. The
-    /// built-in snake only.
-    #[arg(long, conflicts_with = "robot")]
+    /// targets) as CSV: the physics trace that `snakesim convert` turns into a Rerun recording (for a
+    /// robot, every link, and its shapes in the metadata).
+    #[arg(long)]
     pub trace: Option<PathBuf>,
     /// Write a Rerun recording (.rrd) of the run: the cubes in 3D at every physics step and plots of
     /// the joints. Open it with `.venv/bin/rerun FILE` or `snakesim view FILE --serve`. Needs the
     /// snakesim Python package (`bash scripts/setup`): found as $SNAKESIM_PYTHON, .venv/bin/python or
-    /// the `snakesim` command. The built-in snake only.
-    #[arg(long, conflicts_with = "robot")]
+    /// the `snakesim` command. A robot's boxes, spheres, cylinders and capsules are drawn as such.
+    #[arg(long)]
     pub rrd: Option<PathBuf>,
 }
 
@@ -330,9 +330,9 @@ impl RunPlan {
         })
     }
 
-    fn meta(&self) -> serde_json::Value {
+    fn meta(&self, built: &Built) -> Result<serde_json::Value> {
         let s = &self.start;
-        match (&self.body, &self.drive) {
+        Ok(match (&self.body, &self.drive) {
             (BodyPlan::Cubes { config, preset }, Drive::Gait(gait)) => serde_json::json!({
                 "source": "snake-cli run",
                 "joints": config.joints,
@@ -345,8 +345,32 @@ impl RunPlan {
                 "gait": gait,
                 "snake": config,
             }),
-            _ => serde_json::Value::Null,
-        }
+            (BodyPlan::Robot(spec), drive) => {
+                let Built::Robot(robot) = built else {
+                    bail!("a robot plan builds a robot");
+                };
+                serde_json::json!({
+                    "source": "snake-cli run",
+                    "robot": spec.urdf.name,
+                    "file": spec.source,
+                    "joints": self.body.joints(),
+                    "joint_names": spec.joint_names(),
+                    "parts": spec.urdf.links.len(),
+                    "link_names": spec.urdf.links.iter().map(|l| l.name.as_str()).collect::<Vec<_>>(),
+                    "shapes": robot.drawing(spec)?,
+                    "dt": SnakeConfig::default().dt,
+                    "inertia": spec.inertia,
+                    "seconds": self.seconds,
+                    "steps": self.steps,
+                    "start": {"x": s.x, "y": s.y, "z": s.z, "yaw": s.yaw},
+                    "drive": match drive {
+                        Drive::Gait(g) => serde_json::json!({"gait": g}),
+                        Drive::Targets { path, .. } => serde_json::json!({"targets": path}),
+                    },
+                })
+            }
+            (BodyPlan::Cubes { .. }, Drive::Targets { .. }) => bail!("--targets needs --robot"),
+        })
     }
 }
 
@@ -395,11 +419,18 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
         (None, Some(_)) => Some(recording::TraceFile::temporary()?),
         (None, None) => None,
     };
-    let meta = plan.meta();
-    let mut trace = trace_file
-        .as_ref()
-        .map(|f| TraceWriter::create(f.write_path(), f.shown_path(), joints, &meta))
-        .transpose()?;
+    let mut built = plan.body.build(plan.start)?;
+    let parts = built.sim().body_poses()?.len();
+    let mut trace = match &trace_file {
+        Some(f) => Some(TraceWriter::create(
+            f.write_path(),
+            f.shown_path(),
+            joints,
+            parts,
+            &plan.meta(&built)?,
+        )?),
+        None => None,
+    };
     let mut csv = out
         .trajectory
         .as_deref()
@@ -409,7 +440,6 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
         })
         .transpose()?;
 
-    let mut built = plan.body.build(plan.start)?;
     let start_position = built.sim().base_state()?.pose.position;
     let mut path = PathPlot::new(plan.body.draw_half_extent());
     path.sample(built.sim())?;
@@ -440,11 +470,7 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
             csv.record(built.sim())?;
         }
         if let Some(trace) = trace.as_mut() {
-            // The trace's cube layout exists for the built-in snake only (RunArgs refuses the rest).
-            let Built::Cubes(snake) = &built else {
-                bail!("--trace and --rrd need the built-in snake");
-            };
-            trace.record(snake, &targets)?;
+            trace.record(built.sim(), &targets)?;
         }
         if step % 24 == 0 || step == steps {
             path.trace(built.sim())?;

@@ -363,7 +363,7 @@ fn bad_robots_are_one_line_and_write_nothing() {
             "has mass but no collision shape".into(),
         ),
         (vec![good.clone(), "--anisotropic-friction".into(), "1,-1,1".into()], "anisotropic friction".into()),
-        (vec![good.clone(), "--trace".into(), "t.csv".into()], "cannot be used with".into()),
+        (vec![good.clone(), "--joints".into(), "3".into()], "cannot be used with".into()),
     ];
     let output = dir.join("never.csv");
     for (extra, needle) in &cases {

@@ -52,7 +52,7 @@ pub use env::{
 pub use error::{Error, Result};
 pub use gait::{Gait, GaitKind, LateralUndulation};
 pub use math::{quaternion_from_euler, StartPose};
-pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, Simulation};
+pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, ShapeDrawing, Simulation};
 pub use snake::Snake;
 pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, VecSnakeEnv};

@@ -28,7 +28,7 @@ use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, LateralUndulation};
 use crate::limits::MAX_URDF_BYTES;
 use crate::math::StartPose;
-use crate::urdf::{InertiaSource, UrdfRobot};
+use crate::urdf::{Geometry, InertiaSource, UrdfRobot};
 use crate::world::{BaseState, BodyId, Dynamics, Pose, World};
 use crate::{Snake, SnakeConfig};
 
@@ -501,6 +501,55 @@ impl Simulation for Robot {
     }
     fn dt(&self) -> f64 {
         self.dt
+    }
+}
+
+/// One collision shape as a viewer draws it, in its link's centre-of-mass frame.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ShapeDrawing {
+    /// box, sphere, cylinder or capsule (cylinders and capsules along their z axis).
+    pub kind: &'static str,
+    /// Box: full extents; sphere: radius, 0, 0; cylinder and capsule: radius, length, 0.
+    pub size: [f64; 3],
+    /// Centre and orientation: x, y, z, qx, qy, qz, qw.
+    pub pose: [f64; 7],
+}
+
+impl Robot {
+    /// Every body part's shapes (the root first, then each link), as Bullet placed them: for viewers.
+    pub fn drawing(&self, spec: &RobotSpec) -> Result<Vec<Vec<ShapeDrawing>>> {
+        spec.urdf
+            .links
+            .iter()
+            .enumerate()
+            .map(|(k, link)| {
+                let poses = self.world.shape_poses(self.body, k.checked_sub(1))?;
+                Ok(link
+                    .collisions
+                    .iter()
+                    .zip(poses)
+                    .map(|(c, p)| {
+                        let (kind, size) = match c.geometry {
+                            Geometry::Box(s) => ("box", s),
+                            Geometry::Sphere(r) => ("sphere", [r, 0.0, 0.0]),
+                            Geometry::Cylinder { radius, length } => {
+                                ("cylinder", [radius, length, 0.0])
+                            }
+                            Geometry::Capsule { radius, length } => {
+                                ("capsule", [radius, length, 0.0])
+                            }
+                        };
+                        let q = p.orientation.coords;
+                        let x = p.position;
+                        ShapeDrawing {
+                            kind,
+                            size,
+                            pose: [x.x, x.y, x.z, q.x, q.y, q.z, q.w],
+                        }
+                    })
+                    .collect())
+            })
+            .collect()
     }
 }
 

@@ -761,6 +761,48 @@ impl World {
             .collect())
     }
 
+    /// Poses of a link's collision shapes in its centre-of-mass frame (`link` `None`: the base), in
+    /// the order of the URDF's `<collision>` elements: for drawing.
+    pub fn shape_poses(&self, body: BodyId, link: Option<usize>) -> Result<Vec<Pose>> {
+        let n = self.joint_count(body)?;
+        let link = match link {
+            None => -1,
+            Some(l) if l < n => l as i32,
+            Some(l) => return Err(invalid(format!("body {} has no link {l}", body.0))),
+        };
+        let mut count = 0;
+        // SAFETY: live world; capacity 0 with a null buffer only counts.
+        check(unsafe {
+            bullet_sys::ss_get_shape_poses(
+                self.ptr(),
+                body.0,
+                link,
+                std::ptr::null_mut(),
+                0,
+                &mut count,
+            )
+        })?;
+        let mut raw = vec![0.0; 7 * count.max(0) as usize];
+        // SAFETY: raw has room for `count` poses.
+        check(unsafe {
+            bullet_sys::ss_get_shape_poses(
+                self.ptr(),
+                body.0,
+                link,
+                raw.as_mut_ptr(),
+                count,
+                &mut count,
+            )
+        })?;
+        Ok(raw
+            .chunks_exact(7)
+            .map(|c| Pose {
+                position: Vector3::new(c[0], c[1], c[2]),
+                orientation: UnitQuaternion::new_unchecked(Quaternion::new(c[6], c[3], c[4], c[5])),
+            })
+            .collect())
+    }
+
     /// Contact points of the last step that involve `body`.
     pub fn contacts(&self, body: BodyId) -> Result<Vec<Contact>> {
         self.joint_count(body)?;
