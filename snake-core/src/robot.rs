@@ -251,6 +251,12 @@ impl RobotSpec {
             .collect()
     }
 
+    /// Every body part's shapes as Bullet places them (see [`Robot::drawing`]), from a robot built
+    /// for the purpose.
+    pub fn drawing(&self) -> Result<Vec<Vec<ShapeDrawing>>> {
+        Robot::new(self, self.default_start())?.drawing(self)
+    }
+
     /// The start pose: the robot file's, else pybullet's default (the origin, yaw 0).
     pub fn default_start(&self) -> StartPose {
         self.start.unwrap_or(StartPose {

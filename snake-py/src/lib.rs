@@ -169,6 +169,18 @@ impl Env {
         self.with(py, |e| e.config().snake.half_extent)
     }
 
+    /// The shapes of every link of the env's robot (JSON: per link, the root first, a list of
+    /// {kind, size, pose} in the link's centre-of-mass frame), or None for the built-in snake.
+    fn robot_shapes(&self, py: Python<'_>) -> PyResult<Option<String>> {
+        let drawing = self.with(py, |e| {
+            e.config().robot.as_ref().map(|r| r.spec().drawing())
+        });
+        drawing
+            .transpose()
+            .map_err(to_py)
+            .map(|d| d.map(|d| serde_json::to_string(&d).expect("shapes serialise")))
+    }
+
     /// The resolved configuration as JSON.
     fn config_json(&self, py: Python<'_>) -> String {
         self.with(py, |e| {

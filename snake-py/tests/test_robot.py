@@ -43,3 +43,22 @@ def test_spaces_follow_the_robot():
 def test_a_missing_robot_is_one_clear_error():
     with pytest.raises(ValueError, match="nowhere.urdf: cannot read"):
         snakesim.SnakeEnv(robot="nowhere.urdf")
+
+
+def test_a_recorded_robot_episode_draws_its_links(tmp_path):
+    rr = pytest.importorskip("rerun")
+    from snakesim.wrappers import RerunLogger
+
+    recording = rr.RecordingStream("snakesim-test")
+    recording.save(tmp_path / "robot.rrd")
+    env = RerunLogger(
+        snakesim.SnakeEnv(robot=ROBOTS / "wheeled-8.yaml", max_episode_steps=30), recording=recording
+    )
+    env.reset(seed=0)
+    for _ in range(30):
+        env.step(env.action_space.sample())
+    env.close()
+    recording.disconnect()
+    reader = rr.chunk.RrdReader(tmp_path / "robot.rrd")
+    paths = {str(chunk.entity_path) for chunk in reader.stream()}
+    assert {"/world/snake/link0", "/world/snake/link23", "/world/snake/link1/shape0"} <= paths
