@@ -47,6 +47,77 @@ typedef struct ss_chain_desc {
     const double* link_axes;         /* 3 * num_links: revolute axis in the link frame */
 } ss_chain_desc;
 
+/* URDF robots (pybullet's loadURDF with default flags, or URDF_USE_INERTIA_FROM_FILE). The caller parses
+ * the file; the shim builds the multibody from the parsed numbers as BulletURDFImporter and
+ * ConvertURDF2Bullet do, including the rpy -> quaternion step, the inertia and every Bullet call's order. */
+#define SS_SHAPE_BOX 1      /* size = full extents x, y, z */
+#define SS_SHAPE_SPHERE 2   /* size[0] = radius */
+#define SS_SHAPE_CYLINDER 3 /* size[0] = radius, size[1] = length (along z); a 64-vertex convex hull */
+#define SS_SHAPE_CAPSULE 4  /* size[0] = radius, size[1] = length of the cylinder part (along z) */
+
+#define SS_JOINT_REVOLUTE 1   /* values as pybullet's UrdfJointTypes */
+#define SS_JOINT_PRISMATIC 2
+#define SS_JOINT_CONTINUOUS 3
+#define SS_JOINT_FIXED 6
+
+/* Flags of ss_urdf_contact.flags: pybullet's URDF_LinkContactFlags (lateral friction is always set). */
+#define SS_CONTACT_INERTIA_SCALING 2
+#define SS_CONTACT_STIFFNESS_DAMPING 16
+#define SS_CONTACT_ROLLING_FRICTION 32
+#define SS_CONTACT_SPINNING_FRICTION 64
+#define SS_CONTACT_RESTITUTION 128
+#define SS_CONTACT_FRICTION_ANCHOR 256
+
+/* An <origin xyz rpy>: has_rpy 0 leaves the rotation at the identity, as a missing rpy attribute does. */
+typedef struct ss_urdf_origin {
+    double xyz[3];
+    double rpy[3];
+    int has_rpy;
+} ss_urdf_origin;
+
+typedef struct ss_urdf_shape {
+    int type; /* SS_SHAPE_* */
+    double size[3];
+    ss_urdf_origin origin;
+} ss_urdf_shape;
+
+/* pybullet's <contact> extension of a link, with the parser's defaults for what is absent. */
+typedef struct ss_urdf_contact {
+    int flags;
+    double lateral_friction; /* 0.5 when absent */
+    double rolling_friction;
+    double spinning_friction;
+    double restitution;
+    double inertia_scaling;
+    double stiffness; /* 1e4 when only damping is given */
+    double damping;   /* 1 when only stiffness is given */
+} ss_urdf_contact;
+
+typedef struct ss_urdf_link {
+    int parent; /* index in ss_urdf_desc.links of the parent; -1 for the root (links[0]) */
+    /* <inertial>: a link without one has mass 1 and inertia diagonal (1, 1, 1), identity frame. */
+    double mass;
+    ss_urdf_origin inertial_origin;
+    double inertia[6]; /* ixx, ixy, ixz, iyy, iyz, izz */
+    int num_shapes;
+    const ss_urdf_shape* shapes; /* the link's <collision> elements in file order */
+    int has_collision_group, collision_group, has_collision_mask, collision_mask;
+    ss_urdf_contact contact;
+    /* The joint from the parent (ignored for the root). */
+    int joint_type; /* SS_JOINT_* */
+    ss_urdf_origin joint_origin;
+    double axis[3];
+    double lower, upper, effort, velocity, damping, friction; /* the parser's values and defaults */
+} ss_urdf_link;
+
+typedef struct ss_urdf_desc {
+    int num_links;               /* links including the root; the body has num_links - 1 joints */
+    const ss_urdf_link* links;   /* in pybullet's order: depth first from the root, children in joint order */
+    double base_position[3];     /* loadURDF basePosition: the root link frame, not its centre of mass */
+    double base_orientation[4];  /* loadURDF baseOrientation */
+    int inertia_from_file;       /* URDF_USE_INERTIA_FROM_FILE */
+} ss_urdf_desc;
+
 /* pybullet changeDynamics: a field is applied only when "set" (>= 0 for scalars, flag != 0 otherwise),
  * exactly as pybullet sends only the arguments given. */
 typedef struct ss_dynamics {
@@ -96,6 +167,10 @@ int ss_world_add_plane(ss_world* world, int* body_out);
 /* createMultiBody(...) with one box shape for every cube, then pybullet's default joint motors. */
 int ss_world_add_box_chain(ss_world* world, const ss_chain_desc* desc, int* body_out);
 
+/* loadURDF(...) of a parsed robot (see ss_urdf_desc), then pybullet's default joint motors on every
+ * revolute and prismatic joint. Joint j of the body is links[j + 1]. */
+int ss_world_add_urdf(ss_world* world, const ss_urdf_desc* desc, int* body_out);
+
 int ss_body_num_joints(const ss_world* world, int body, int* count);
 /* changeDynamics(body, link, ...); link -1 is the base. */
 int ss_change_dynamics(ss_world* world, int body, int link, const ss_dynamics* dynamics);
@@ -110,6 +185,11 @@ int ss_set_joint_motor(ss_world* world, int body, int joint, int mode, double ta
 int ss_set_position_targets(ss_world* world, int body, int count, const double* targets, double force,
                             double kp, double kd);
 
+/* setJointMotorControlArray(body, joints, POSITION_CONTROL, targetPositions, forces, positionGains=kp,
+ * velocityGains=kd) on the given joints (each must have a motor: revolute or prismatic). */
+int ss_set_position_targets_at(ss_world* world, int body, int count, const int* joints, const double* targets,
+                               const double* forces, double kp, double kd);
+
 /* p.stepSimulation(): joint damping torques, then one internal step of dt. */
 int ss_world_step(ss_world* world);
 
@@ -118,8 +198,15 @@ int ss_get_base_state(const ss_world* world, int body, ss_base_state* out);
  * applied impulse / dt, as pybullet reports it. */
 int ss_get_joint_states(const ss_world* world, int body, int count, double* positions,
                         double* velocities, double* applied_torques);
+/* getJointStates(body, joints) for the given joints; output pointers as for ss_get_joint_states. */
+int ss_get_joint_states_at(const ss_world* world, int body, int count, const int* joints, double* positions,
+                           double* velocities, double* applied_torques);
 /* World pose of each link's COM frame, 7 values (x, y, z, qx, qy, qz, qw) per link 0..count-1. */
 int ss_get_link_poses(const ss_world* world, int body, int count, double* poses);
+/* Poses of the collision shapes of link `link` (-1: the base) in its centre-of-mass frame, 7 values
+ * each (x, y, z, qx, qy, qz, qw), in the order of the URDF's <collision> elements; *count_out is their
+ * number (one identity pose when the importer used the single shape directly). */
+int ss_get_shape_poses(const ss_world* world, int body, int link, double* poses, int capacity, int* count_out);
 /* Contact points of the last step that involve `body`, up to `capacity`; *count_out is the total. */
 int ss_get_contacts(const ss_world* world, int body, ss_contact* out, int capacity, int* count_out);
 

@@ -7,7 +7,9 @@ use std::time::Instant;
 use crate::output::say;
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use snake_core::{Gait, LateralUndulation, Preset, Snake, StartPose};
+use snake_core::{
+    Gait, LateralUndulation, Preset, Robot, RobotGait, RobotSpec, Simulation, Snake, StartPose,
+};
 
 /// The pybullet side of the benchmark, in the repository this binary was built from.
 fn pybullet_bench_script() -> PathBuf {
@@ -37,6 +39,10 @@ pub struct BenchArgs {
     /// Measure snakesim only.
     #[arg(long)]
     pub no_reference: bool,
+    /// Measure a robot (a URDF or robot file) driven by its sine gait instead of the built-in snake;
+    /// both sides replay the same precomputed targets.
+    #[arg(long, conflicts_with = "joints")]
+    pub robot: Option<PathBuf>,
 }
 
 fn median(mut values: Vec<f64>) -> f64 {
@@ -110,6 +116,141 @@ fn pybullet_rates(python: &Path, args: &BenchArgs) -> Result<serde_json::Value> 
     serde_json::from_str(line).context("the pybullet benchmark printed no JSON")
 }
 
+/// Steps per second of one robot run replaying `rows` of targets.
+fn one_robot_run(spec: &RobotSpec, rows: &[Vec<f64>]) -> Result<f64> {
+    let mut robot = Robot::new(spec, spec.default_start())?;
+    let clock = Instant::now();
+    for row in rows {
+        robot.set_targets(row)?;
+        robot.step()?;
+    }
+    Ok(rows.len() as f64 / clock.elapsed().as_secs_f64())
+}
+
+/// pybullet's rates on the same robot and targets (tests/reference/urdf_bench.py).
+fn pybullet_robot_rates(
+    python: &Path,
+    spec: &RobotSpec,
+    rows: &[Vec<f64>],
+    repeats: usize,
+) -> Result<Vec<f64>> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/urdf_bench.py");
+    if !script.exists() {
+        bail!(
+            "{} is missing (run bench from a snakesim checkout)",
+            script.display()
+        );
+    }
+    let dir = tempfile::tempdir().context("cannot make a temporary directory")?;
+    let targets = dir.path().join("targets.csv");
+    let text: String = rows
+        .iter()
+        .map(|r| {
+            let cells: Vec<String> = r.iter().map(|v| format!("{v:?}")).collect();
+            cells.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(&targets, text).context("cannot write the targets")?;
+    let start = spec.default_start();
+    let urdf = spec
+        .urdf
+        .source
+        .as_ref()
+        .context("the robot has no file")?
+        .canonicalize()
+        .context("cannot find the robot's URDF")?;
+    let scenario = serde_json::json!({
+        "name": "bench",
+        "urdf": urdf,
+        "start": [start.x, start.y, start.z, start.yaw],
+        "inertia": spec.inertia.to_string(),
+        "friction": spec.anisotropic_friction.iter().enumerate()
+            .filter_map(|(k, a)| a.map(|a| (k as i32 - 1, a)))
+            .collect::<Vec<_>>(),
+        "kp": spec.motors.kp,
+        "kd": spec.motors.kd,
+        "targets": targets,
+    });
+    let spec_path = dir.path().join("scenario.json");
+    std::fs::write(&spec_path, scenario.to_string()).context("cannot write the scenario")?;
+    let out = Command::new(python)
+        .arg(&script)
+        .arg(&spec_path)
+        .arg(repeats.to_string())
+        .output()
+        .with_context(|| format!("cannot run {}", python.display()))?;
+    if !out.status.success() {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        bail!(
+            "the pybullet benchmark failed: {}",
+            stderr.lines().last().unwrap_or("no output")
+        );
+    }
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('['))
+        .unwrap_or("");
+    serde_json::from_str(line).context("the pybullet benchmark printed no JSON")
+}
+
+fn bench_robot(args: &BenchArgs, path: &Path) -> Result<()> {
+    let spec = RobotSpec::load(path)?;
+    let mut gait = RobotGait::new(spec.gait.clone().unwrap_or_default(), &spec);
+    let m = spec.urdf.movable_joints().len();
+    let rows: Vec<Vec<f64>> = (0..args.steps)
+        .map(|_| {
+            let mut row = vec![0.0; m];
+            gait.next_targets(&mut row);
+            row
+        })
+        .collect();
+    say!(
+        "physics steps per second, one core, {} ({} links, {m} movable joints) on its sine gait; median of {} runs of {} steps",
+        spec.urdf.name,
+        spec.urdf.links.len(),
+        args.repeats,
+        args.steps
+    )?;
+    // Ours and pybullet's runs alternate, so that a load that changes during the benchmark (other
+    // processes on a shared machine) weighs on both alike.
+    let python = if args.no_reference {
+        None
+    } else {
+        let found = find_python(args.python.as_deref());
+        if found.is_none() {
+            eprintln!("note: no Python with pybullet found (.venv/bin/python or --python); measuring snakesim only");
+        }
+        found
+    };
+    let (mut ours, mut theirs) = (Vec::new(), python.as_ref().map(|_| Vec::new()));
+    for _ in 0..args.repeats {
+        ours.push(one_robot_run(&spec, &rows)?);
+        if let (Some(python), Some(rates)) = (&python, theirs.as_mut()) {
+            match pybullet_robot_rates(python, &spec, &rows, 1) {
+                Ok(r) => rates.extend(r),
+                Err(e) => {
+                    eprintln!("note: pybullet reference not measured: {e:#}");
+                    theirs = None;
+                }
+            }
+        }
+    }
+    let ours = median(ours);
+    let theirs = theirs.filter(|r| !r.is_empty()).map(median);
+    say!(
+        "{:>16}  {:>16}  {:>7}",
+        "snakesim",
+        "pybullet 3.2.7",
+        "ratio"
+    )?;
+    match theirs {
+        Some(t) => say!("{ours:>16.0}  {t:>16.0}  {:>6.2}x", ours / t),
+        None => say!("{ours:>16.0}  {:>16}  {:>7}", "-", "-"),
+    }
+}
+
 /// Runs the benchmark and prints a table.
 pub fn bench(args: &BenchArgs) -> Result<()> {
     let max_joints = snake_core::limits::MAX_JOINTS;
@@ -129,6 +270,9 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             "--repeats must be in [1, {MAX_BENCH_REPEATS}], got {}",
             args.repeats
         );
+    }
+    if let Some(path) = &args.robot {
+        return bench_robot(args, path);
     }
     say!(
         "physics steps per second, one core, gait running; median of {} runs of {} steps",

@@ -6,6 +6,7 @@ mod output;
 mod plot;
 mod recording;
 mod run;
+mod targets;
 mod trace;
 mod train;
 mod trajectory;
@@ -24,8 +25,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a gait and report the snake's motion; optionally write the trajectory (CSV), a plot (PNG)
-    /// and a Rerun recording (.rrd).
+    /// Run a gait (or joint targets) on the built-in snake or a URDF robot and report its motion;
+    /// optionally write the trajectory (CSV), a plot (PNG) and a Rerun recording (.rrd).
     Run(run::RunArgs),
     /// Run episodes of the RL environment with a fixed policy (random, zero or the gait).
     Env(env_run::EnvArgs),

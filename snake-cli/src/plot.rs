@@ -1,4 +1,4 @@
-//! Top-down picture of a run: the head's path and the snake's pose at regular moments.
+//! Top-down picture of a run: the head's path and the snake's (or robot's) pose at regular moments.
 
 use std::path::Path;
 use std::sync::OnceLock;
@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
-use snake_core::{Pose, Snake};
+use snake_core::{Pose, Simulation};
 
 use crate::output::OutputFile;
 
@@ -47,27 +47,26 @@ pub struct PathPlot {
 }
 
 impl PathPlot {
-    /// An empty plot.
-    pub fn new() -> Self {
+    /// An empty plot whose bodies are drawn as squares of `half_extent` (metres).
+    pub fn new(half_extent: f64) -> Self {
         PathPlot {
             trace: Vec::new(),
             snapshots: Vec::with_capacity(10),
-            half_extent: 0.25,
+            half_extent,
         }
     }
 
-    /// Adds the head's current position to the path.
-    pub fn trace(&mut self, snake: &Snake) -> Result<()> {
-        let p = snake.base_state()?.pose.position;
+    /// Adds the head's (the base's) current position to the path.
+    pub fn trace(&mut self, body: &dyn Simulation) -> Result<()> {
+        let p = body.base_state()?.pose.position;
         self.trace.push((p.x, p.y));
         Ok(())
     }
 
-    /// Records the pose of every cube now.
-    pub fn sample(&mut self, snake: &Snake) -> Result<()> {
-        self.half_extent = snake.config().half_extent;
-        self.trace(snake)?;
-        self.snapshots.push((snake.time(), snake.cube_poses()?));
+    /// Records the pose of every body part (cube or link) now.
+    pub fn sample(&mut self, body: &dyn Simulation) -> Result<()> {
+        self.trace(body)?;
+        self.snapshots.push((body.time(), body.body_poses()?));
         Ok(())
     }
 

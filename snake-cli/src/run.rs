@@ -1,39 +1,70 @@
-//! `snake-cli run`: drive the snake with a gait and report how it moved.
+//! `snake-cli run`: drive the built-in snake or a URDF robot and report how it moved.
+//!
+//! The clap flags ([`RunArgs`]) fill a typed [`RunPlan`]: what is simulated ([`BodyPlan`]: the built-in
+//! cubes or a robot file), where it starts and for how long, how its joints are driven ([`Drive`]: a gait
+//! or a targets CSV) and what is written ([`Outputs`]). Everything is checked while the plan is made, so
+//! a bad flag or file fails before any simulation and before anything is written; [`execute`] then runs
+//! it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use snake_core::{Gait, GaitKind, LateralUndulation, Preset, Snake, StartPose};
+use snake_core::urdf::Geometry;
+use snake_core::{
+    Gait, GaitKind, InertiaSource, LateralUndulation, Preset, Robot, RobotGait, RobotSpec,
+    Simulation, Snake, SnakeConfig, StartPose,
+};
 
 use crate::output::{check_distinct, say, OutputFile};
 use crate::plot::{self, PathPlot};
 use crate::recording::{self, Converter};
+use crate::targets::TargetTable;
 use crate::trace::TraceWriter;
 use crate::trajectory::TrajectoryWriter;
 
 /// Arguments of `snake-cli run`.
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// Number of joints N (the snake has N + 1 cubes).
-    #[arg(long, default_value_t = 10)]
+    /// Number of joints N of the built-in snake (N + 1 cubes).
+    #[arg(long, default_value_t = 10, conflicts_with = "robot")]
     pub joints: usize,
-    /// Gait: sine (pybullet's snake.py lateral undulation).
+    /// A robot instead of the built-in snake: a URDF file (pybullet's loadURDF with default flags) or a
+    /// YAML robot file around one (anisotropic friction, motor gains, start pose; see robots/).
+    #[arg(long)]
+    pub robot: Option<PathBuf>,
+    /// Gait: sine (pybullet's snake.py lateral undulation), on every actuated joint (URDF effort > 0)
+    /// in joint order; a robot file may set the wave's parameters.
     #[arg(long, default_value = "sine")]
     pub gait: GaitKind,
-    /// Parameter preset: paper (every cube 0.06 kg) or snakebot-gym (links 1.0 kg, the paper's code).
-    #[arg(long, default_value = "paper")]
+    /// Joint targets from a CSV instead of the gait (--robot only): header step,<joint names> (any
+    /// order), one row per 1/240 s physics step, applied before that step; the run lasts as many steps
+    /// as the file has rows.
+    #[arg(long, requires = "robot", conflicts_with_all = ["seconds", "steer"])]
+    pub targets: Option<PathBuf>,
+    /// Parameter preset of the built-in snake: paper (every cube 0.06 kg) or snakebot-gym (links 1.0 kg,
+    /// the paper's code).
+    #[arg(long, default_value = "paper", conflicts_with = "robot")]
     pub preset: Preset,
     /// Simulated duration in seconds.
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub seconds: f64,
-    /// Start pose of the base: X,Y,Z,YAW (metres, radians). Default: 0,0,<half extent>,0.
+    /// Start pose of the base: X,Y,Z,YAW (metres, radians). Default: 0,0,<half extent>,0 for the snake;
+    /// for a robot, its robot file's start, else pybullet's 0,0,0,0 (the root link's frame).
     #[arg(long, value_parser = parse_start, allow_hyphen_values = true)]
     pub start: Option<StartPose>,
     /// Steering offset in radians (snake.py uses +-0.2; positive turns left).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub steer: f64,
+    /// Anisotropic friction X,Y,Z of the robot's base and every link, in each link's frame (pybullet's
+    /// changeDynamics(anisotropicFriction=...)); replaces the robot file's.
+    #[arg(long, requires = "robot", value_parser = parse_friction)]
+    pub anisotropic_friction: Option<[f64; 3]>,
+    /// Where the robot's link inertias come from: shapes (pybullet's default) or file
+    /// (URDF_USE_INERTIA_FROM_FILE). Default: the robot file's, else shapes.
+    #[arg(long, requires = "robot")]
+    pub inertia: Option<InertiaSource>,
     /// Write the trajectory here as CSV (one row per 1/240 s step).
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -41,92 +72,345 @@ pub struct RunArgs {
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Write the full state after every physics step (cube poses, joint angles, velocities, torques,
-    /// targets) as CSV: the physics trace that `snakesim convert` turns into a Rerun recording.
+    /// targets) as CSV: the physics trace that `snakesim convert` turns into a Rerun recording (for a
+    /// robot, every link, and its shapes in the metadata).
     #[arg(long)]
     pub trace: Option<PathBuf>,
     /// Write a Rerun recording (.rrd) of the run: the cubes in 3D at every physics step and plots of
     /// the joints. Open it with `.venv/bin/rerun FILE` or `snakesim view FILE --serve`. Needs the
     /// snakesim Python package (`bash scripts/setup`): found as $SNAKESIM_PYTHON, .venv/bin/python or
-    /// the `snakesim` command.
+    /// the `snakesim` command. A robot's boxes, spheres, cylinders and capsules are drawn as such.
     #[arg(long)]
     pub rrd: Option<PathBuf>,
 }
 
-fn parse_start(text: &str) -> Result<StartPose, String> {
+fn parse_numbers<const N: usize>(text: &str, what: &str) -> Result<[f64; N], String> {
     let values: Vec<f64> = text
         .split(',')
         .map(|v| v.trim().parse::<f64>())
         .collect::<Result<_, _>>()
-        .map_err(|_| format!("'{text}' is not X,Y,Z,YAW (four numbers separated by commas)"))?;
-    let [x, y, z, yaw] = values[..] else {
-        return Err(format!(
-            "'{text}' has {} values; expected X,Y,Z,YAW",
-            values.len()
-        ));
-    };
+        .map_err(|_| format!("'{text}' is not {what} ({N} numbers separated by commas)"))?;
+    values
+        .try_into()
+        .map_err(|v: Vec<f64>| format!("'{text}' has {} values; expected {what}", v.len()))
+}
+
+fn parse_start(text: &str) -> Result<StartPose, String> {
+    let [x, y, z, yaw] = parse_numbers::<4>(text, "X,Y,Z,YAW")?;
     let pose = StartPose { x, y, z, yaw };
     pose.validate().map_err(|e| e.to_string())?;
     Ok(pose)
 }
 
-/// Runs the gait and prints a summary.
-pub fn run(args: &RunArgs) -> Result<()> {
-    if args.joints < 1 {
-        bail!("--joints must be at least 1, got {}", args.joints);
+fn parse_friction(text: &str) -> Result<[f64; 3], String> {
+    let a = parse_numbers::<3>(text, "X,Y,Z")?;
+    if a.iter().all(|v| v.is_finite() && *v >= 0.0) {
+        Ok(a)
+    } else {
+        Err(format!(
+            "'{text}': anisotropic friction must be finite and >= 0"
+        ))
     }
-    let max_seconds = snake_core::limits::MAX_RUN_SECONDS;
-    if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= max_seconds) {
-        bail!(
-            "--seconds must be a positive number of at most {max_seconds}, got {:?}",
-            args.seconds
-        );
-    }
-    let config = args.preset.config(args.joints);
-    config.validate()?;
-    let mut gait = match args.gait {
-        GaitKind::Sine => LateralUndulation::default().with_steering(args.steer),
-    };
-    gait.dt = config.dt;
-    gait.validate()?;
-    let start = args
-        .start
-        .unwrap_or_else(|| StartPose::resting(config.half_extent));
-    let steps = (args.seconds / config.dt).round() as u64;
-    if steps == 0 {
-        bail!(
-            "--seconds {} is shorter than one physics step ({} s)",
-            args.seconds,
-            config.dt
-        );
+}
+
+/// What is simulated.
+pub enum BodyPlan {
+    /// The built-in snake of `config.joints` cubes.
+    Cubes {
+        /// Its parameters.
+        config: SnakeConfig,
+        /// The preset they come from.
+        preset: Preset,
+    },
+    /// A URDF robot (from a URDF or a robot file, with the command line's overrides applied).
+    Robot(Box<RobotSpec>),
+}
+
+impl BodyPlan {
+    fn joints(&self) -> usize {
+        match self {
+            BodyPlan::Cubes { config, .. } => config.joints,
+            BodyPlan::Robot(spec) => spec.urdf.movable_joints().len(),
+        }
     }
 
+    fn build(&self, start: StartPose) -> Result<Built> {
+        Ok(match self {
+            BodyPlan::Cubes { config, .. } => Built::Cubes(Snake::new(config, start)?),
+            BodyPlan::Robot(spec) => Built::Robot(Robot::new(spec, start)?),
+        })
+    }
+
+    /// Half the size of a body part, for the plot's squares.
+    fn draw_half_extent(&self) -> f64 {
+        match self {
+            BodyPlan::Cubes { config, .. } => config.half_extent,
+            BodyPlan::Robot(spec) => {
+                let sizes: Vec<f64> =
+                    spec.urdf
+                        .links
+                        .iter()
+                        .flat_map(|l| l.collisions.iter())
+                        .map(|c| match c.geometry {
+                            Geometry::Box(s) => s.iter().copied().fold(0.0, f64::max) / 2.0,
+                            Geometry::Sphere(r) => r,
+                            Geometry::Cylinder { radius, .. }
+                            | Geometry::Capsule { radius, .. } => radius,
+                        })
+                        .collect();
+                if sizes.is_empty() {
+                    0.05
+                } else {
+                    sizes.iter().sum::<f64>() / sizes.len() as f64
+                }
+            }
+        }
+    }
+}
+
+/// The simulated body of a run.
+enum Built {
+    Cubes(Snake),
+    Robot(Robot),
+}
+
+impl Built {
+    fn sim(&self) -> &dyn Simulation {
+        match self {
+            Built::Cubes(s) => s,
+            Built::Robot(r) => r,
+        }
+    }
+
+    fn sim_mut(&mut self) -> &mut dyn Simulation {
+        match self {
+            Built::Cubes(s) => s,
+            Built::Robot(r) => r,
+        }
+    }
+}
+
+/// How the joints are driven.
+pub enum Drive {
+    /// A gait, stepped once per physics step.
+    Gait(LateralUndulation),
+    /// Targets from a file, one row per physics step.
+    Targets {
+        /// The file.
+        path: PathBuf,
+        /// Its rows, in the robot's joint order.
+        table: TargetTable,
+    },
+}
+
+/// Where results go; every path was checked before the run.
+#[derive(Default)]
+pub struct Outputs {
+    /// Trajectory CSV.
+    pub trajectory: Option<PathBuf>,
+    /// PNG plot.
+    pub plot: Option<PathBuf>,
+    /// Physics trace CSV (the built-in snake).
+    pub trace: Option<PathBuf>,
+    /// Rerun recording (the built-in snake).
+    pub rrd: Option<PathBuf>,
+}
+
+/// A checked run.
+pub struct RunPlan {
+    /// What is simulated.
+    pub body: BodyPlan,
+    /// Start pose of the base (the root link's frame for a robot).
+    pub start: StartPose,
+    /// Physics steps.
+    pub steps: u64,
+    /// How the joints are driven.
+    pub drive: Drive,
+    /// Steering of the gait (for the summary).
+    pub steer: f64,
+    /// The gait's name (for the summary).
+    pub gait: GaitKind,
+    /// Where results go.
+    pub outputs: Outputs,
+    /// Simulated seconds asked for.
+    pub seconds: f64,
+}
+
+impl RunPlan {
+    /// Checks the flags and reads every input file.
+    pub fn from_args(args: &RunArgs) -> Result<Self> {
+        let config_dt = SnakeConfig::default().dt;
+        let body = match &args.robot {
+            None => {
+                if args.joints < 1 {
+                    bail!("--joints must be at least 1, got {}", args.joints);
+                }
+                let config = args.preset.config(args.joints);
+                config.validate()?;
+                BodyPlan::Cubes {
+                    config,
+                    preset: args.preset,
+                }
+            }
+            Some(path) => {
+                let mut spec = RobotSpec::load(path)?;
+                if let Some(a) = args.anisotropic_friction {
+                    spec.anisotropic_friction
+                        .iter_mut()
+                        .for_each(|f| *f = Some(a));
+                }
+                if let Some(inertia) = args.inertia {
+                    spec.inertia = inertia;
+                }
+                spec.urdf.check_inertia(spec.inertia)?;
+                BodyPlan::Robot(Box::new(spec))
+            }
+        };
+        let (drive, steps, seconds) = match &args.targets {
+            Some(path) => {
+                let BodyPlan::Robot(spec) = &body else {
+                    bail!("--targets needs --robot");
+                };
+                let table = TargetTable::load(path, &spec.joint_names())?;
+                let steps = table.rows.len() as u64;
+                let drive = Drive::Targets {
+                    path: path.clone(),
+                    table,
+                };
+                (drive, steps, steps as f64 * config_dt)
+            }
+            None => {
+                let max_seconds = snake_core::limits::MAX_RUN_SECONDS;
+                if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= max_seconds)
+                {
+                    bail!(
+                        "--seconds must be a positive number of at most {max_seconds}, got {:?}",
+                        args.seconds
+                    );
+                }
+                let base = match &body {
+                    BodyPlan::Robot(spec) => spec.gait.clone().unwrap_or_default(),
+                    BodyPlan::Cubes { .. } => LateralUndulation::default(),
+                };
+                let mut gait = match args.gait {
+                    GaitKind::Sine => base.with_steering(args.steer),
+                };
+                gait.dt = config_dt;
+                gait.validate()?;
+                let steps = (args.seconds / config_dt).round() as u64;
+                if steps == 0 {
+                    bail!(
+                        "--seconds {} is shorter than one physics step ({} s)",
+                        args.seconds,
+                        config_dt
+                    );
+                }
+                (Drive::Gait(gait), steps, args.seconds)
+            }
+        };
+        let start = match (&args.start, &body) {
+            (Some(s), _) => *s,
+            (None, BodyPlan::Cubes { config, .. }) => StartPose::resting(config.half_extent),
+            (None, BodyPlan::Robot(spec)) => spec.default_start(),
+        };
+        Ok(RunPlan {
+            body,
+            start,
+            steps,
+            drive,
+            steer: args.steer,
+            gait: args.gait,
+            outputs: Outputs {
+                trajectory: args.output.clone(),
+                plot: args.plot.clone(),
+                trace: args.trace.clone(),
+                rrd: args.rrd.clone(),
+            },
+            seconds,
+        })
+    }
+
+    fn meta(&self, built: &Built) -> Result<serde_json::Value> {
+        let s = &self.start;
+        Ok(match (&self.body, &self.drive) {
+            (BodyPlan::Cubes { config, preset }, Drive::Gait(gait)) => serde_json::json!({
+                "source": "snake-cli run",
+                "joints": config.joints,
+                "dt": config.dt,
+                "half_extent": config.half_extent,
+                "preset": preset.to_string(),
+                "seconds": self.seconds,
+                "steps": self.steps,
+                "start": {"x": s.x, "y": s.y, "z": s.z, "yaw": s.yaw},
+                "gait": gait,
+                "snake": config,
+            }),
+            (BodyPlan::Robot(spec), drive) => {
+                let Built::Robot(robot) = built else {
+                    bail!("a robot plan builds a robot");
+                };
+                serde_json::json!({
+                    "source": "snake-cli run",
+                    "robot": spec.urdf.name,
+                    "file": spec.source,
+                    "joints": self.body.joints(),
+                    "joint_names": spec.joint_names(),
+                    "parts": spec.urdf.links.len(),
+                    "link_names": spec.urdf.links.iter().map(|l| l.name.as_str()).collect::<Vec<_>>(),
+                    "shapes": robot.drawing(spec)?,
+                    "dt": SnakeConfig::default().dt,
+                    "inertia": spec.inertia,
+                    "seconds": self.seconds,
+                    "steps": self.steps,
+                    "start": {"x": s.x, "y": s.y, "z": s.z, "yaw": s.yaw},
+                    "drive": match drive {
+                        Drive::Gait(g) => serde_json::json!({"gait": g}),
+                        Drive::Targets { path, .. } => serde_json::json!({"targets": path}),
+                    },
+                })
+            }
+            (BodyPlan::Cubes { .. }, Drive::Targets { .. }) => bail!("--targets needs --robot"),
+        })
+    }
+}
+
+/// Runs the gait (or the targets) and prints a summary.
+pub fn run(args: &RunArgs) -> Result<()> {
+    let plan = RunPlan::from_args(args)?;
+    execute(&plan)
+}
+
+/// Runs a checked plan.
+pub fn execute(plan: &RunPlan) -> Result<()> {
+    let out = &plan.outputs;
+    let joints = plan.body.joints();
     // Check the outputs first: a bad path or format fails before any simulation time is spent, and
     // nothing replaces an existing file until its new contents are complete.
-    let outputs: Vec<(&str, &std::path::Path)> = [
-        ("--output", &args.output),
-        ("--plot", &args.plot),
-        ("--trace", &args.trace),
-        ("--rrd", &args.rrd),
+    let outputs: Vec<(&str, &Path)> = [
+        ("--output", &out.trajectory),
+        ("--plot", &out.plot),
+        ("--trace", &out.trace),
+        ("--rrd", &out.rrd),
     ]
     .into_iter()
     .filter_map(|(flag, path)| path.as_deref().map(|p| (flag, p)))
     .collect();
     check_distinct(&outputs)?;
-    for (flag, path) in [("--rrd", &args.rrd), ("--trace", &args.trace)] {
+    for (flag, path) in [("--rrd", &out.rrd), ("--trace", &out.trace)] {
         if path.is_some() {
-            recording::check_seconds(flag, args.seconds)?;
+            recording::check_seconds(flag, plan.seconds)?;
         }
     }
-    let rrd_file = args
+    let rrd_file = out
         .rrd
         .as_deref()
         .map(|p| OutputFile::new(p, "recording", &["rrd"]))
         .transpose()?;
     // Before any simulation: the recording's converter must be there.
-    let converter = args.rrd.as_ref().map(|_| Converter::find()).transpose()?;
-    let plot_file = args.plot.as_deref().map(plot::output).transpose()?;
+    let converter = out.rrd.as_ref().map(|_| Converter::find()).transpose()?;
+    let plot_file = out.plot.as_deref().map(plot::output).transpose()?;
     // The trace goes to --trace, or (for --rrd alone) to a temporary file.
-    let trace_file = match (&args.trace, &rrd_file) {
+    let trace_file = match (&out.trace, &rrd_file) {
         (Some(p), _) => Some(recording::TraceFile::Output(OutputFile::new(
             p,
             "trace",
@@ -135,72 +419,149 @@ pub fn run(args: &RunArgs) -> Result<()> {
         (None, Some(_)) => Some(recording::TraceFile::temporary()?),
         (None, None) => None,
     };
-    let meta = serde_json::json!({
-        "source": "snake-cli run",
-        "joints": args.joints,
-        "dt": config.dt,
-        "half_extent": config.half_extent,
-        "preset": args.preset.to_string(),
-        "seconds": args.seconds,
-        "steps": steps,
-        "start": {"x": start.x, "y": start.y, "z": start.z, "yaw": start.yaw},
-        "gait": &gait,
-        "snake": &config,
-    });
-    let mut trace = trace_file
-        .as_ref()
-        .map(|f| TraceWriter::create(f.write_path(), f.shown_path(), args.joints, &meta))
-        .transpose()?;
-    let mut csv = args
-        .output
+    let mut built = plan.body.build(plan.start)?;
+    let parts = built.sim().body_poses()?.len();
+    let mut trace = match &trace_file {
+        Some(f) => Some(TraceWriter::create(
+            f.write_path(),
+            f.shown_path(),
+            joints,
+            parts,
+            &plan.meta(&built)?,
+        )?),
+        None => None,
+    };
+    let mut csv = out
+        .trajectory
         .as_deref()
         .map(|p| {
             let file = OutputFile::new(p, "trajectory", &[])?;
-            TrajectoryWriter::create(file, args.joints)
+            TrajectoryWriter::create(file, joints)
         })
         .transpose()?;
 
-    let mut snake = Snake::new(&config, start)?;
-    let start_position = snake.base_state()?.pose.position;
-    let mut path = PathPlot::new();
-    path.sample(&snake)?;
+    let start_position = built.sim().base_state()?.pose.position;
+    let mut path = PathPlot::new(plan.body.draw_half_extent());
+    path.sample(built.sim())?;
+    let steps = plan.steps;
     let snapshot_every = (steps / 4).max(1);
-    let mut targets = vec![0.0; args.joints];
+    let mut targets = vec![0.0; joints];
+    // The gait's wave runs over the actuated joints; passive ones (effort 0) keep target 0.
+    let mut gait: Option<Box<dyn Gait>> = match (&plan.drive, &plan.body) {
+        (Drive::Gait(g), BodyPlan::Cubes { .. }) => Some(Box::new(g.clone())),
+        (Drive::Gait(g), BodyPlan::Robot(spec)) => Some(Box::new(RobotGait::new(g.clone(), spec))),
+        (Drive::Targets { .. }, _) => None,
+    };
     let clock = Instant::now();
     for step in 1..=steps {
-        gait.next_targets(&mut targets);
-        snake.set_targets(&targets)?;
-        snake.step().with_context(|| format!("at step {step}"))?;
+        match (&mut gait, &plan.drive) {
+            (Some(g), _) => g.next_targets(&mut targets),
+            (None, Drive::Targets { table, .. }) => {
+                targets.copy_from_slice(&table.rows[(step - 1) as usize])
+            }
+            (None, Drive::Gait(_)) => unreachable!("a gait run has its gait"),
+        }
+        let body = built.sim_mut();
+        if joints > 0 {
+            body.set_targets(&targets)?;
+        }
+        body.step().with_context(|| format!("at step {step}"))?;
         if let Some(csv) = csv.as_mut() {
-            csv.record(&snake)?;
+            csv.record(built.sim())?;
         }
         if let Some(trace) = trace.as_mut() {
-            trace.record(&snake, &targets)?;
+            trace.record(built.sim(), &targets)?;
         }
         if step % 24 == 0 || step == steps {
-            path.trace(&snake)?;
+            path.trace(built.sim())?;
         }
         if step % snapshot_every == 0 {
-            path.sample(&snake)?;
+            path.sample(built.sim())?;
         }
     }
     let wall = clock.elapsed().as_secs_f64();
+    let body = built.sim();
+    summary(plan, body, start_position, wall)?;
+    if let (Some(csv), Some(path)) = (csv, &out.trajectory) {
+        csv.finish()?;
+        say!("wrote {} ({steps} rows)", path.display())?;
+    }
+    if let Some(file) = plot_file {
+        let written = file.path().to_path_buf();
+        let end = body.base_state()?.pose.position - start_position;
+        let distance = end.xy().norm();
+        let title = match &plan.body {
+            BodyPlan::Cubes { config, preset } => format!(
+                "{} joints, {preset} preset: {distance:.2} m in {:.1} s",
+                config.joints,
+                body.time()
+            ),
+            BodyPlan::Robot(spec) => format!(
+                "{}: {distance:.2} m in {:.1} s",
+                spec.urdf.name,
+                body.time()
+            ),
+        };
+        path.draw(file, &title)?;
+        say!("wrote {}", written.display())?;
+    }
+    if let (Some(trace), Some(file)) = (trace, trace_file) {
+        trace.finish()?;
+        let path = file.commit()?;
+        if let Some(shown) = &out.trace {
+            say!("wrote {} ({steps} rows)", shown.display())?;
+        }
+        if let (Some(rrd), Some(converter)) = (rrd_file, converter) {
+            let written = rrd.path().to_path_buf();
+            converter.convert(&path, rrd.temp_path(), &written)?;
+            rrd.commit()?;
+            say!(
+                "wrote {} (open it with: .venv/bin/rerun {0}, or snakesim view {0} --serve)",
+                written.display()
+            )?;
+        }
+    }
+    Ok(())
+}
 
-    let end = snake.base_state()?.pose;
+fn summary(
+    plan: &RunPlan,
+    body: &dyn Simulation,
+    start_position: nalgebra::Vector3<f64>,
+    wall: f64,
+) -> Result<()> {
+    let steps = plan.steps;
+    let dt = SnakeConfig::default().dt;
+    let end = body.base_state()?.pose;
     let moved = end.position - start_position;
     let distance = moved.xy().norm();
-    say!(
-        "snake: {} joints ({} cubes), preset {}, gait {}, steering {}",
-        args.joints,
-        args.joints + 1,
-        args.preset,
-        args.gait,
-        args.steer
-    )?;
+    match (&plan.body, &plan.drive) {
+        (BodyPlan::Cubes { config, preset }, _) => say!(
+            "snake: {} joints ({} cubes), preset {preset}, gait {}, steering {}",
+            config.joints,
+            config.joints + 1,
+            plan.gait,
+            plan.steer
+        )?,
+        (BodyPlan::Robot(spec), drive) => {
+            let how = match drive {
+                Drive::Gait(_) => format!("gait {}, steering {}", plan.gait, plan.steer),
+                Drive::Targets { path, .. } => format!("targets {}", path.display()),
+            };
+            say!(
+                "robot: {} ({}): {} links, {} movable joints, inertia from {}, {how}",
+                spec.urdf.name,
+                spec.source.display(),
+                spec.urdf.links.len(),
+                body.joints(),
+                spec.inertia
+            )?
+        }
+    }
     say!(
         "simulated {:.2} s ({steps} steps of 1/{:.0} s) in {wall:.2} s wall: {:.0} steps/s",
-        snake.time(),
-        1.0 / config.dt,
+        body.time(),
+        1.0 / dt,
         steps as f64 / wall
     )?;
     say!(
@@ -210,7 +571,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         end.position.x,
         end.position.y
     )?;
-    say!("mean speed {:.3} m/s", distance / snake.time())?;
+    say!("mean speed {:.3} m/s", distance / body.time())?;
     say!(
         "heading    travel direction {:+.1} deg (counter-clockwise from +x); head yaw {:+.1} deg",
         moved.y.atan2(moved.x).to_degrees(),
@@ -222,37 +583,5 @@ pub fn run(args: &RunArgs) -> Result<()> {
         end.position.y,
         end.position.z,
         end.yaw()
-    )?;
-    if let (Some(csv), Some(path)) = (csv, &args.output) {
-        csv.finish()?;
-        say!("wrote {} ({steps} rows)", path.display())?;
-    }
-    if let Some(file) = plot_file {
-        let out = file.path().to_path_buf();
-        let title = format!(
-            "{} joints, {} preset: {distance:.2} m in {:.1} s",
-            args.joints,
-            args.preset,
-            snake.time()
-        );
-        path.draw(file, &title)?;
-        say!("wrote {}", out.display())?;
-    }
-    if let (Some(trace), Some(file)) = (trace, trace_file) {
-        trace.finish()?;
-        let path = file.commit()?;
-        if let Some(shown) = &args.trace {
-            say!("wrote {} ({steps} rows)", shown.display())?;
-        }
-        if let (Some(rrd), Some(converter)) = (rrd_file, converter) {
-            let out = rrd.path().to_path_buf();
-            converter.convert(&path, rrd.temp_path(), &out)?;
-            rrd.commit()?;
-            say!(
-                "wrote {} (open it with: .venv/bin/rerun {0}, or snakesim view {0} --serve)",
-                out.display()
-            )?;
-        }
-    }
-    Ok(())
+    )
 }

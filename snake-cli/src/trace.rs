@@ -3,7 +3,8 @@
 //!
 //! Line 1: `# snakesim physics trace 1 {JSON}` (joints, dt, half extent, the run's settings). Line 2:
 //! `step,t`, then `c{i}_x,c{i}_y,c{i}_z,c{i}_qx,c{i}_qy,c{i}_qz,c{i}_qw` for each cube i = 0..N (0 is
-//! the head), then `q{j}` (angles, rad), `qd{j}` (velocities, rad/s), `tau{j}` (motor torques, N m),
+//! the head; for a robot, each link's centre of mass, the root first, and the metadata's `parts` and
+//! `shapes` say how many and what to draw), then `q{j}` (angles, rad), `qd{j}` (velocities, rad/s), `tau{j}` (motor torques, N m),
 //! `target{j}` (targets, rad) for each joint j. One row per physics step from step 1, floats in
 //! shortest round-trip form (exact bits).
 
@@ -14,7 +15,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use snake_core::env::PhysicsTrace;
-use snake_core::Snake;
+use snake_core::Simulation;
 
 /// First words of the metadata line.
 pub const FORMAT: &str = "snakesim physics trace 1";
@@ -28,11 +29,13 @@ pub struct TraceWriter {
 }
 
 impl TraceWriter {
-    /// Creates `path` (the caller makes it atomic) and writes the two header lines.
+    /// Creates `path` (the caller makes it atomic) and writes the two header lines: `parts` poses
+    /// (cubes, or a robot's links) and `joints` joints per row.
     pub fn create(
         path: &Path,
         shown: &Path,
         joints: usize,
+        parts: usize,
         meta: &serde_json::Value,
     ) -> Result<Self> {
         let shown = shown.display().to_string();
@@ -40,7 +43,7 @@ impl TraceWriter {
             File::create(path).with_context(|| format!("cannot write trace to {shown}"))?;
         let mut out = BufWriter::new(handle);
         let mut header = String::from("step,t");
-        for c in 0..=joints {
+        for c in 0..parts {
             for k in ["x", "y", "z", "qx", "qy", "qz", "qw"] {
                 write!(header, ",c{c}_{k}").expect("String write");
             }
@@ -61,7 +64,7 @@ impl TraceWriter {
     }
 
     /// Appends the snake's current state with the targets of the step that led to it.
-    pub fn record(&mut self, snake: &Snake, targets: &[f64]) -> Result<()> {
+    pub fn record(&mut self, snake: &dyn Simulation, targets: &[f64]) -> Result<()> {
         self.row.clear();
         self.row.record(snake, Some(targets))?;
         let r = &self.row;

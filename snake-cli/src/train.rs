@@ -185,12 +185,15 @@ pub fn run(args: &TrainArgs, matches: &clap::ArgMatches) -> Result<ExitCode> {
     let lock = trainer::lock_run(&config, &run_dir, args.resume)?;
     let prepared = trainer::prepare(&config, &lock, args.resume)?;
     let resolved = prepared.config.clone();
+    let env = resolved.env_config()?;
+    let body = match &env.robot {
+        Some(robot) => format!("robot {} ({} joints)", robot.path().display(), env.joints()),
+        None => format!("{} joints, preset {}", resolved.joints, resolved.preset),
+    };
     say!(
-        "run {}: PPO-{}, {} joints, preset {}, {} timesteps, {} envs, seed {}{}",
+        "run {}: PPO-{}, {body}, {} timesteps, {} envs, seed {}{}",
         run_dir.display(),
         resolved.arch,
-        resolved.joints,
-        resolved.preset,
         resolved.timesteps,
         resolved.n_envs,
         resolved.seed,

@@ -9,7 +9,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 
 use anyhow::{Context, Result};
-use snake_core::Snake;
+use snake_core::Simulation;
 
 use crate::output::OutputFile;
 
@@ -43,8 +43,8 @@ impl TrajectoryWriter {
         })
     }
 
-    /// Appends the snake's current state as the row of its latest step.
-    pub fn record(&mut self, snake: &Snake) -> Result<()> {
+    /// Appends the body's current state as the row of its latest step.
+    pub fn record(&mut self, snake: &dyn Simulation) -> Result<()> {
         let base = snake.base_state()?;
         snake.read_joints(&mut self.joints, &mut [])?;
         let p = base.pose.position;

@@ -27,9 +27,33 @@ pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
 use crate::math::StartPose;
-use crate::Snake;
+use crate::robot::Simulation;
+use crate::{Robot, Snake};
 use action::Driver;
 use observation::JointScratch;
+
+/// The body of an episode.
+#[derive(Debug)]
+enum EnvBody {
+    Cubes(Snake),
+    Robot(Robot),
+}
+
+impl EnvBody {
+    fn sim(&self) -> &dyn Simulation {
+        match self {
+            EnvBody::Cubes(s) => s,
+            EnvBody::Robot(r) => r,
+        }
+    }
+
+    fn sim_mut(&mut self) -> &mut dyn Simulation {
+        match self {
+            EnvBody::Cubes(s) => s,
+            EnvBody::Robot(r) => r,
+        }
+    }
+}
 
 /// Per-episode choices for [`SnakeEnv::reset`].
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -212,7 +236,7 @@ enum Phase {
 pub struct SnakeEnv {
     config: EnvConfig,
     rng: Option<ChaCha12Rng>,
-    snake: Option<Snake>,
+    snake: Option<EnvBody>,
     phase: Phase,
     goal: (f64, f64),
     start: StartPose,
@@ -317,9 +341,18 @@ impl SnakeEnv {
         self.phase != Phase::Running
     }
 
-    /// The current episode's snake and world (for rendering or extra measurements), if any.
+    /// The current episode's snake and world (for rendering or extra measurements), if any and if it
+    /// is the built-in snake.
     pub fn snake(&self) -> Option<&Snake> {
-        self.snake.as_ref()
+        match self.snake.as_ref() {
+            Some(EnvBody::Cubes(s)) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The current episode's body, the built-in snake or a robot, if any.
+    pub fn simulation(&self) -> Option<&dyn Simulation> {
+        self.snake.as_ref().map(EnvBody::sim)
     }
 
     /// Starts an episode and returns the first observation. See the type's documentation.
@@ -376,11 +409,15 @@ impl SnakeEnv {
         if let Some(trace) = self.trace.as_mut() {
             trace.clear();
         }
-        let mut snake = Snake::new(&self.config.snake, start)?;
+        let mut body = match &self.config.robot {
+            None => EnvBody::Cubes(Snake::new(&self.config.snake, start)?),
+            Some(robot) => EnvBody::Robot(Robot::new(robot.spec(), start)?),
+        };
+        let snake = body.sim_mut();
         // The paper steps once before the first observation.
         snake.step()?;
         if let Some(trace) = self.trace.as_mut() {
-            trace.record(&snake, None)?;
+            trace.record(snake, None)?;
         }
         self.goal = goal;
         self.start = start;
@@ -390,7 +427,7 @@ impl SnakeEnv {
         self.driver.reset();
         let base = observation::write(
             self.config.observation,
-            &snake,
+            snake,
             self.goal,
             self.wave_phase(),
             &mut self.joints,
@@ -407,7 +444,7 @@ impl SnakeEnv {
             obs[1],
             self.config.reward.distance_precision,
         );
-        self.snake = Some(snake);
+        self.snake = Some(body);
         self.phase = Phase::Running;
         Ok(self.info(RewardTerms::default(), false))
     }
@@ -521,12 +558,12 @@ impl SnakeEnv {
     /// before each or before the first) and the observation after it; returns the base's state and
     /// the motors' mechanical work (J) over the step.
     fn simulate(&mut self, obs: &mut [f32]) -> Result<(observation::BaseState, f64)> {
-        let Some(snake) = self.snake.as_mut() else {
+        let Some(snake) = self.snake.as_mut().map(EnvBody::sim_mut) else {
             return Err(invalid(
                 "step() needs reset() first (no episode is running)",
             ));
         };
-        let dt = snake.config().dt;
+        let dt = snake.dt();
         let mut work = 0.0;
         let driver = &mut self.driver;
         let per_physics_step = driver.per_physics_step();
@@ -544,13 +581,7 @@ impl SnakeEnv {
                 snake.set_targets(&self.targets)?;
             }
             snake.step()?;
-            let body = snake.body();
-            snake.world().read_joints(
-                body,
-                &mut [],
-                &mut self.joints.velocities,
-                &mut self.torques,
-            )?;
+            snake.read_joint_states(&mut [], &mut self.joints.velocities, &mut self.torques)?;
             let power: f64 = self
                 .torques
                 .iter()
@@ -592,7 +623,7 @@ impl SnakeEnv {
             success,
             episode_step: self.episode_step,
             episode_return: self.episode_return,
-            time: self.snake.as_ref().map_or(0.0, Snake::time),
+            time: self.snake.as_ref().map_or(0.0, |b| b.sim().time()),
             goal: self.goal,
             start: self.start,
             work: self.work,

@@ -37,7 +37,9 @@ pub mod error;
 pub mod gait;
 pub mod limits;
 pub mod math;
+pub mod robot;
 pub mod snake;
+pub mod urdf;
 pub mod vec_env;
 pub mod world;
 
@@ -50,7 +52,9 @@ pub use env::{
 pub use error::{Error, Result};
 pub use gait::{Gait, GaitKind, LateralUndulation};
 pub use math::{quaternion_from_euler, StartPose};
+pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, ShapeDrawing, Simulation};
 pub use snake::Snake;
+pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};
 pub use world::{
     BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose, World,

@@ -58,6 +58,18 @@ pub const MAX_REPLAY_PANELS: u64 = 24;
 /// Most episodes in one Rerun recording of an agent (`snakesim replay --episodes`).
 pub const MAX_RECORDING_EPISODES: u64 = 100;
 
+/// Most links of a URDF robot (its root included): as many bodies as the built-in snake may have.
+pub const MAX_ROBOT_LINKS: usize = MAX_JOINTS + 1;
+
+/// Most `<collision>` shapes of one URDF link.
+pub const MAX_SHAPES_PER_LINK: usize = 64;
+
+/// Largest URDF or robot file read, bytes (16 MiB).
+pub const MAX_URDF_BYTES: u64 = 16 << 20;
+
+/// Most rows of a joint-targets CSV (`snake-cli run --targets`): an hour of 1/240 s steps.
+pub const MAX_TARGET_ROWS: usize = 864_000;
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {

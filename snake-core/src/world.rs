@@ -9,6 +9,7 @@ use std::ptr::NonNull;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::error::{check, invalid, Error, Result};
+use crate::urdf::{Geometry, InertiaSource, Inertial, Joint, JointKind, Origin, UrdfRobot};
 
 /// Index of a body within its [`World`], in creation order (pybullet's body unique id).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -319,6 +320,222 @@ impl World {
         Ok(BodyId(id))
     }
 
+    /// `loadURDF(robot, basePosition, baseOrientation)` with default flags, or with
+    /// `URDF_USE_INERTIA_FROM_FILE` for [`InertiaSource::File`]: the multibody as pybullet's importer
+    /// builds it, then pybullet's default motors on every revolute, continuous and prismatic joint.
+    /// `position` and `orientation` (x, y, z, w) place the root link's frame.
+    pub fn add_urdf(
+        &mut self,
+        robot: &UrdfRobot,
+        position: [f64; 3],
+        orientation: [f64; 4],
+        inertia: InertiaSource,
+    ) -> Result<BodyId> {
+        finite(&position, "base position")?;
+        finite(&orientation, "base orientation")?;
+        robot.check_inertia(inertia)?;
+        let origin = |o: &Origin| bullet_sys::ss_urdf_origin {
+            xyz: o.xyz,
+            rpy: o.rpy.unwrap_or([0.0; 3]),
+            has_rpy: o.rpy.is_some() as i32,
+        };
+        let shapes: Vec<Vec<bullet_sys::ss_urdf_shape>> = robot
+            .links
+            .iter()
+            .map(|l| {
+                l.collisions
+                    .iter()
+                    .map(|c| {
+                        let (kind, size) = match c.geometry {
+                            Geometry::Box(s) => (bullet_sys::SS_SHAPE_BOX, s),
+                            Geometry::Sphere(r) => (bullet_sys::SS_SHAPE_SPHERE, [r, 0.0, 0.0]),
+                            Geometry::Cylinder { radius, length } => {
+                                (bullet_sys::SS_SHAPE_CYLINDER, [radius, length, 0.0])
+                            }
+                            Geometry::Capsule { radius, length } => {
+                                (bullet_sys::SS_SHAPE_CAPSULE, [radius, length, 0.0])
+                            }
+                        };
+                        bullet_sys::ss_urdf_shape {
+                            type_: kind as i32,
+                            size,
+                            origin: origin(&c.origin),
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut links = Vec::with_capacity(robot.links.len());
+        for (k, (link, shapes)) in robot.links.iter().zip(&shapes).enumerate() {
+            let parent = match (k, link.parent) {
+                (0, None) => -1,
+                (k, Some(p)) if p < k => p as i32,
+                _ => {
+                    return Err(invalid(format!(
+                        "{}: links are not in depth-first order",
+                        robot.shown()
+                    )))
+                }
+            };
+            // UrdfParser: a link without <inertial> has mass 1, inertia diagonal 1, identity frame.
+            let inertial = link.inertial.unwrap_or(Inertial {
+                origin: Origin::default(),
+                mass: 1.0,
+                inertia: [1.0, 0.0, 0.0, 1.0, 0.0, 1.0],
+            });
+            let c = &link.contact;
+            let mut flags = 0u32;
+            let mut set = |v: Option<f64>, flag: u32| {
+                if v.is_some() {
+                    flags |= flag;
+                }
+                v.unwrap_or(0.0)
+            };
+            let rolling = set(c.rolling_friction, bullet_sys::SS_CONTACT_ROLLING_FRICTION);
+            let spinning = set(
+                c.spinning_friction,
+                bullet_sys::SS_CONTACT_SPINNING_FRICTION,
+            );
+            let restitution = set(c.restitution, bullet_sys::SS_CONTACT_RESTITUTION);
+            let scaling = set(c.inertia_scaling, bullet_sys::SS_CONTACT_INERTIA_SCALING);
+            if c.stiffness.is_some() || c.damping.is_some() {
+                flags |= bullet_sys::SS_CONTACT_STIFFNESS_DAMPING;
+            }
+            if c.friction_anchor {
+                flags |= bullet_sys::SS_CONTACT_FRICTION_ANCHOR;
+            }
+            let joint = link.joint.as_ref();
+            let joint_type = match joint.map(|j| j.kind) {
+                None | Some(JointKind::Fixed) => bullet_sys::SS_JOINT_FIXED,
+                Some(JointKind::Revolute) => bullet_sys::SS_JOINT_REVOLUTE,
+                Some(JointKind::Continuous) => bullet_sys::SS_JOINT_CONTINUOUS,
+                Some(JointKind::Prismatic) => bullet_sys::SS_JOINT_PRISMATIC,
+            };
+            let j = |f: fn(&Joint) -> f64| joint.map_or(0.0, f);
+            links.push(bullet_sys::ss_urdf_link {
+                parent,
+                mass: inertial.mass,
+                inertial_origin: origin(&inertial.origin),
+                inertia: inertial.inertia,
+                num_shapes: shapes.len() as i32,
+                shapes: shapes.as_ptr(),
+                has_collision_group: link.collision_group.is_some() as i32,
+                collision_group: link.collision_group.unwrap_or(0),
+                has_collision_mask: link.collision_mask.is_some() as i32,
+                collision_mask: link.collision_mask.unwrap_or(0),
+                contact: bullet_sys::ss_urdf_contact {
+                    flags: flags as i32,
+                    lateral_friction: c.lateral_friction.unwrap_or(0.5),
+                    rolling_friction: rolling,
+                    spinning_friction: spinning,
+                    restitution,
+                    inertia_scaling: scaling,
+                    stiffness: c.stiffness.unwrap_or(1e4),
+                    damping: c.damping.unwrap_or(1.0),
+                },
+                joint_type: joint_type as i32,
+                joint_origin: origin(&joint.map(|j| j.origin).unwrap_or_default()),
+                axis: joint.map_or([1.0, 0.0, 0.0], |j| j.axis),
+                lower: j(|j| j.lower),
+                upper: j(|j| j.upper),
+                effort: j(|j| j.effort),
+                velocity: j(|j| j.velocity),
+                damping: j(|j| j.damping),
+                friction: j(|j| j.friction),
+            });
+        }
+        let num_links = i32::try_from(links.len()).map_err(|_| invalid("too many links"))?;
+        let desc = bullet_sys::ss_urdf_desc {
+            num_links,
+            links: links.as_ptr(),
+            base_position: position,
+            base_orientation: orientation,
+            inertia_from_file: (inertia == InertiaSource::File) as i32,
+        };
+        let mut id = 0;
+        // SAFETY: live world; desc, links and every shapes vector outlive the call, with the counts given.
+        check(unsafe { bullet_sys::ss_world_add_urdf(self.ptr(), &desc, &mut id) })?;
+        self.joints.push(links.len() - 1);
+        Ok(BodyId(id))
+    }
+
+    /// `setJointMotorControlArray(body, joints, POSITION_CONTROL, targetPositions=targets,
+    /// forces=forces, positionGains=[kp]*n, velocityGains=[kd]*n)`: each of `joints` must be a revolute,
+    /// continuous or prismatic joint.
+    pub fn set_position_targets_at(
+        &mut self,
+        body: BodyId,
+        joints: &[i32],
+        targets: &[f64],
+        forces: &[f64],
+        kp: f64,
+        kd: f64,
+    ) -> Result<()> {
+        self.joint_count(body)?;
+        if targets.len() != joints.len() || forces.len() != joints.len() {
+            return Err(invalid(format!(
+                "{} joints, {} targets and {} forces",
+                joints.len(),
+                targets.len(),
+                forces.len()
+            )));
+        }
+        finite(targets, "joint targets")?;
+        finite(forces, "motor forces")?;
+        finite(&[kp, kd], "motor gains")?;
+        // SAFETY: live world; the three slices hold joints.len() values each.
+        check(unsafe {
+            bullet_sys::ss_set_position_targets_at(
+                self.ptr(),
+                body.0,
+                joints.len() as i32,
+                joints.as_ptr(),
+                targets.as_ptr(),
+                forces.as_ptr(),
+                kp,
+                kd,
+            )
+        })
+    }
+
+    /// Angles, velocities and motor torques of the given joints (`getJointStates(body, joints)`),
+    /// written into slices as long as `joints` (an empty slice skips that quantity).
+    pub fn read_joints_at(
+        &self,
+        body: BodyId,
+        joints: &[i32],
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()> {
+        self.joint_count(body)?;
+        let n = joints.len();
+        let out = |s: &mut [f64], what: &str| -> Result<*mut f64> {
+            match s.len() {
+                0 => Ok(std::ptr::null_mut()),
+                len if len == n => Ok(s.as_mut_ptr()),
+                len => Err(invalid(format!("{what}: slice of {len} for {n} joints"))),
+            }
+        };
+        let (p, v, t) = (
+            out(positions, "positions")?,
+            out(velocities, "velocities")?,
+            out(torques, "torques")?,
+        );
+        // SAFETY: live world; joints holds n indices and every non-null pointer addresses n f64.
+        check(unsafe {
+            bullet_sys::ss_get_joint_states_at(
+                self.ptr(),
+                body.0,
+                n as i32,
+                joints.as_ptr(),
+                p,
+                v,
+                t,
+            )
+        })
+    }
+
     fn joint_count(&self, body: BodyId) -> Result<usize> {
         self.joints
             .get(body.index())
@@ -534,6 +751,48 @@ impl World {
         // SAFETY: live world; raw holds 7 * n writable f64.
         check(unsafe {
             bullet_sys::ss_get_link_poses(self.ptr(), body.0, n as i32, raw.as_mut_ptr())
+        })?;
+        Ok(raw
+            .chunks_exact(7)
+            .map(|c| Pose {
+                position: Vector3::new(c[0], c[1], c[2]),
+                orientation: UnitQuaternion::new_unchecked(Quaternion::new(c[6], c[3], c[4], c[5])),
+            })
+            .collect())
+    }
+
+    /// Poses of a link's collision shapes in its centre-of-mass frame (`link` `None`: the base), in
+    /// the order of the URDF's `<collision>` elements: for drawing.
+    pub fn shape_poses(&self, body: BodyId, link: Option<usize>) -> Result<Vec<Pose>> {
+        let n = self.joint_count(body)?;
+        let link = match link {
+            None => -1,
+            Some(l) if l < n => l as i32,
+            Some(l) => return Err(invalid(format!("body {} has no link {l}", body.0))),
+        };
+        let mut count = 0;
+        // SAFETY: live world; capacity 0 with a null buffer only counts.
+        check(unsafe {
+            bullet_sys::ss_get_shape_poses(
+                self.ptr(),
+                body.0,
+                link,
+                std::ptr::null_mut(),
+                0,
+                &mut count,
+            )
+        })?;
+        let mut raw = vec![0.0; 7 * count.max(0) as usize];
+        // SAFETY: raw has room for `count` poses.
+        check(unsafe {
+            bullet_sys::ss_get_shape_poses(
+                self.ptr(),
+                body.0,
+                link,
+                raw.as_mut_ptr(),
+                count,
+                &mut count,
+            )
         })?;
         Ok(raw
             .chunks_exact(7)

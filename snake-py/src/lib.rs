@@ -170,6 +170,18 @@ impl Env {
         self.with(py, |e| e.config().snake.half_extent)
     }
 
+    /// The shapes of every link of the env's robot (JSON: per link, the root first, a list of
+    /// {kind, size, pose} in the link's centre-of-mass frame), or None for the built-in snake.
+    fn robot_shapes(&self, py: Python<'_>) -> PyResult<Option<String>> {
+        let drawing = self.with(py, |e| {
+            e.config().robot.as_ref().map(|r| r.spec().drawing())
+        });
+        drawing
+            .transpose()
+            .map_err(to_py)
+            .map(|d| d.map(|d| serde_json::to_string(&d).expect("shapes serialise")))
+    }
+
     /// The resolved configuration as JSON.
     fn config_json(&self, py: Python<'_>) -> String {
         self.with(py, |e| {
@@ -209,11 +221,12 @@ impl Env {
         ))
     }
 
-    /// Pose of every cube, the head first: an (N + 1, 7) array of x, y, z, qx, qy, qz, qw.
+    /// Pose of every cube (every link of a robot), the head first: an (N + 1, 7) array of x, y, z,
+    /// qx, qy, qz, qw (one row per link for a robot).
     fn cube_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let flat: Option<Result<Vec<f64>, snake_core::Error>> = self.with(py, |env| {
-            env.snake().map(|snake| {
-                snake.cube_poses().map(|poses| {
+            env.simulation().map(|snake| {
+                snake.body_poses().map(|poses| {
                     poses
                         .iter()
                         .flat_map(|p| {

@@ -14,6 +14,8 @@ from hypothesis import strategies as st
 from snakesim import SnakeEnv, agents
 from snakesim.config import ENV_KEYWORDS
 
+ROBOTS = Path(__file__).resolve().parents[2] / "robots"
+
 # Examples per property: each builds a world and steps it a few times (~5 ms).
 EXAMPLES = 500
 USER_ERRORS = (ValueError, TypeError, RuntimeError)
@@ -53,6 +55,7 @@ plausible = {
     "goal_distribution": st.one_of(
         st.none(), st.fixed_dictionaries({"distance": st.tuples(st.floats(0, 5), st.floats(5, 20))})
     ),
+    "robot": st.sampled_from([None, str(ROBOTS / "paper-cubes-5.yaml"), str(ROBOTS / "wheeled-8.urdf")]),
     "snake": st.dictionaries(
         st.sampled_from(["link_mass", "base_mass", "motor_force", "lateral_friction"]),
         st.floats(0.01, 20),

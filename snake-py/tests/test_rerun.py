@@ -502,3 +502,57 @@ def test_snake_cli_refuses_a_recording_longer_than_the_limit(snake_cli, tmp_path
 
 def test_recording_errors_are_value_errors():
     assert issubclass(RecordingError, ValueError)
+
+
+# -- snake-cli run --robot --rrd: links moved by their poses, shapes drawn as such --------------------
+ROBOT_URDF = """<robot name="four-shapes">
+  <link name="head"><collision><geometry><box size="0.2 0.1 0.1"/></geometry></collision></link>
+  <link name="ball"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <link name="can"><collision><origin xyz="0 0.1 0" rpy="1.5707963267948966 0 0"/>
+    <geometry><cylinder radius="0.04" length="0.2"/></geometry></collision></link>
+  <link name="pill"><inertial><origin xyz="0 0.02 0"/><mass value="0.5"/>
+    <inertia ixx="0.01" iyy="0.01" izz="0.01"/></inertial>
+    <collision><geometry><capsule radius="0.03" length="0.1"/></geometry></collision>
+    <collision><origin xyz="0 0.1 0"/><geometry><box size="0.05 0.05 0.05"/></geometry></collision></link>
+  <joint name="a" type="continuous"><parent link="head"/><child link="ball"/><origin xyz="0 0.15 0"/>
+    <axis xyz="0 0 1"/><limit effort="5"/></joint>
+  <joint name="b" type="revolute"><parent link="ball"/><child link="can"/><origin xyz="0 0.06 0"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="5"/></joint>
+  <joint name="c" type="fixed"><parent link="can"/><child link="pill"/><origin xyz="0 0.25 0"/></joint>
+</robot>
+"""
+
+
+def test_robot_recording_draws_each_link(snake_cli, tmp_path):
+    urdf = tmp_path / "four.urdf"
+    urdf.write_text(ROBOT_URDF)
+    result = subprocess.run(
+        [snake_cli, "run", "--robot", urdf, "--start=0,0,0.3,0", "--seconds", "1"]
+        + ["--trace", tmp_path / "trace.csv", "--rrd", tmp_path / "robot.rrd"],
+        capture_output=True,
+        text=True,
+        env=_env(),
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    meta, blocks = read_trace(tmp_path / "trace.csv")
+    (trace,) = list(blocks)
+    assert meta["parts"] == 4 and meta["joints"] == 2 and trace.poses.shape == (240, 4, 7)
+    entities = read_rrd(tmp_path / "robot.rrd")
+    kinds = {
+        "/world/snake/link0/shape0": "half_sizes",
+        "/world/snake/link1/shape0": "half_sizes",  # an ellipsoid
+        "/world/snake/link2/shape0": "lengths",  # a cylinder
+        "/world/snake/link3/shape0": "lengths",  # a capsule
+        "/world/snake/link3/shape1": "half_sizes",
+    }
+    for path, component in kinds.items():
+        assert any(k.endswith(component) for k in entities[path]["static"]), (path, entities[path]["static"])
+    for i in range(4):
+        rows = entities[f"/world/snake/link{i}"]["rows"]
+        assert [row["step"] for row in rows] == list(range(1, 241))
+        translations = np.array(_column(rows, "translation")).reshape(-1, 3)
+        assert np.array_equal(translations, trace.poses[:, i, :3].astype(np.float32))
+    # The cylinder stands along the link's y axis (its origin's rpy), 0.1 m ahead of the link frame.
+    pose = meta["shapes"][2][0]["pose"]
+    assert np.allclose(pose[:3], [0, 0.1, 0]) and np.allclose(np.abs(pose[3]), np.sqrt(0.5))

@@ -529,6 +529,8 @@ pub fn env_keyword_defaults(task: Task) -> Map<String, Value> {
             map.insert(k, v);
         }
     }
+    // No robot: the built-in snake (the field is left out of serialised configs when unset).
+    map.entry("robot").or_insert(Value::Null);
     map
 }
 

@@ -141,9 +141,14 @@ pub(crate) struct Driver {
 impl Driver {
     pub fn new(config: &super::EnvConfig) -> Self {
         let (dt, half_extent) = (config.snake.dt, config.snake.half_extent);
-        let mut wave = LateralUndulation::default();
+        // A robot's own wave (its robot file's `gait`), else snake.py's along cubes of the snake's size.
+        let robot_wave = config.robot.as_ref().and_then(|r| r.spec().gait.clone());
+        let has_robot_wave = robot_wave.is_some();
+        let mut wave = robot_wave.unwrap_or_default();
         wave.dt = dt;
-        wave.segment_length = half_extent * 2.0;
+        if !has_robot_wave {
+            wave.segment_length = half_extent * 2.0;
+        }
         Driver {
             config: config.action,
             action_scale: config.action_scale,

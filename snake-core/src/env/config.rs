@@ -10,6 +10,7 @@ use crate::limits::{
     check_position, check_range, MAX_ACTION_SCALE, MAX_EPISODE_STEPS,
     MAX_PHYSICS_STEPS_PER_ENV_STEP, MAX_POSITION, MAX_REWARD_WEIGHT, MAX_START_HEIGHT, MAX_YAW,
 };
+use crate::robot::RobotRef;
 
 /// Everything that defines a [`SnakeEnv`](super::SnakeEnv); the defaults are the paper's env
 /// (`Snake-v0` of snakebot-gym) except for the snake's masses, which follow the paper's text (see
@@ -24,6 +25,13 @@ pub struct EnvConfig {
     /// [`EnvConfig::snakebot_gym`] or set `base_mass`/`link_mass`. A partial `snake` table in a
     /// serialised config takes its missing fields from the `paper` preset.
     pub snake: SnakeConfig,
+    /// A URDF robot instead of the built-in snake (`None`): the path of a `.urdf` or robot file,
+    /// loaded when the configuration is made. With a robot, `snake` still gives the time step and
+    /// gravity, the robot file gives the body, its friction and its motors, an action holds one value
+    /// per movable joint (pybullet's joint order) and the observation's joint pairs are the movable
+    /// joints'; the start distribution places the root link's frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robot: Option<RobotRef>,
     /// Goal position (x, y) on the plane, metres ((0, -10)); used when `goal_distribution` is `None`.
     pub goal: (f64, f64),
     /// Draw each episode's goal relative to its start pose instead of using `goal` (`None`).
@@ -51,6 +59,7 @@ impl Default for EnvConfig {
     fn default() -> Self {
         EnvConfig {
             snake: SnakeConfig::default(),
+            robot: None,
             goal: (0.0, -10.0),
             goal_distribution: None,
             goal_radius: 1.0,
@@ -305,20 +314,23 @@ impl EnvConfig {
         EnvConfig::with_preset(Preset::SnakebotGym, joints)
     }
 
-    /// Number of joints (the action length).
+    /// Number of driven joints: the snake's, or the robot's movable joints.
     pub fn joints(&self) -> usize {
-        self.snake.joints
+        match &self.robot {
+            Some(r) => r.spec().urdf.movable_joints().len(),
+            None => self.snake.joints,
+        }
     }
 
     /// Length of an action: one value per joint, or the gait mode's three.
     pub fn action_dim(&self) -> usize {
-        self.action.dim(self.snake.joints)
+        self.action.dim(self.joints())
     }
 
     /// Length of the observation vector: the layout's, plus the wave's phase (sin, cos) when the
     /// extended layout meets a wave action mode.
     pub fn observation_dim(&self) -> usize {
-        self.observation.dim(self.snake.joints) + 2 * usize::from(self.observes_wave_phase())
+        self.observation.dim(self.joints()) + 2 * usize::from(self.observes_wave_phase())
     }
 
     /// Whether the observation ends with the sine and cosine of the wave's phase at the head.
@@ -332,6 +344,14 @@ impl EnvConfig {
             crate::Error::InvalidArgument(m) => invalid(format!("snake.{m}")),
             other => other,
         })?;
+        if let Some(r) = &self.robot {
+            if self.joints() == 0 {
+                return Err(invalid(format!(
+                    "robot: {} has no movable joint to act on",
+                    r.path().display()
+                )));
+            }
+        }
         check_position("goal", self.goal.0, self.goal.1)?;
         check_range("goal_radius", self.goal_radius, 0.0, MAX_POSITION)?;
         if !(1..=MAX_EPISODE_STEPS).contains(&self.max_episode_steps) {

@@ -2,8 +2,8 @@
 
 use super::config::ObservationLayout;
 use crate::error::Result;
+use crate::robot::Simulation;
 pub(crate) use crate::world::BaseState;
-use crate::Snake;
 
 /// Planar heading of the base: the rotation about world z of its x axis (0 at the paper's start
 /// orientation, where the tail extends along +y and the snake crawls towards -y).
@@ -36,7 +36,7 @@ impl JointScratch {
 /// `np.array(...).astype(np.float32)` does.
 pub(crate) fn write(
     layout: ObservationLayout,
-    snake: &Snake,
+    snake: &dyn Simulation,
     goal: (f64, f64),
     wave_phase: Option<f64>,
     scratch: &mut JointScratch,

@@ -4,7 +4,7 @@
 //! with it off.
 
 use crate::error::Result;
-use crate::Snake;
+use crate::robot::Simulation;
 
 /// The state after each physics step of the latest [`SnakeEnv::reset`](super::SnakeEnv::reset) or
 /// [`SnakeEnv::step`](super::SnakeEnv::step), when [`SnakeEnv::set_physics_trace`](super::SnakeEnv::set_physics_trace)
@@ -13,7 +13,8 @@ use crate::Snake;
 /// bounded however long the episode: read it after every call.
 ///
 /// Row `k` of each per-joint vector is `joints` values starting at `k * joints`; of `poses`,
-/// `(joints + 1) * 7` values starting at `k * (joints + 1) * 7`.
+/// `(joints + 1) * 7` values starting at `k * (joints + 1) * 7` for the built-in snake (for a URDF
+/// robot, one pose per link, the root first: `poses.len() / len()` values per row).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PhysicsTrace {
     /// Number of joints N.
@@ -23,7 +24,8 @@ pub struct PhysicsTrace {
     pub steps: Vec<u64>,
     /// Simulated seconds since the world was built, after each recorded step ([`Snake::time`]).
     pub times: Vec<f64>,
-    /// Pose of every cube, the head (base) first: x, y, z (metres), qx, qy, qz, qw.
+    /// Pose of every cube (every link of a robot), the head (base) first: x, y, z (metres), qx, qy,
+    /// qz, qw.
     pub poses: Vec<f64>,
     /// Joint angles, radians.
     pub positions: Vec<f64>,
@@ -67,7 +69,7 @@ impl PhysicsTrace {
 
     /// Appends the snake's current state, with the targets of the step that led to it (`None`: no
     /// targets were set). Only reads the world.
-    pub fn record(&mut self, snake: &Snake, targets: Option<&[f64]>) -> Result<()> {
+    pub fn record(&mut self, snake: &dyn Simulation, targets: Option<&[f64]>) -> Result<()> {
         let n = self.joints;
         if snake.joints() != n || targets.is_some_and(|t| t.len() != n) {
             return Err(crate::error::invalid(format!(
@@ -75,13 +77,12 @@ impl PhysicsTrace {
                 snake.joints()
             )));
         }
-        let poses = snake.cube_poses()?;
+        let poses = snake.body_poses()?;
         let start = self.positions.len();
         self.positions.resize(start + n, 0.0);
         self.velocities.resize(start + n, 0.0);
         self.torques.resize(start + n, 0.0);
-        if let Err(e) = snake.world().read_joints(
-            snake.body(),
+        if let Err(e) = snake.read_joint_states(
             &mut self.positions[start..],
             &mut self.velocities[start..],
             &mut self.torques[start..],

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -63,7 +64,10 @@ class SnakeEnv(gymnasium.Env):
     ``goal_radius`` (1.0), ``max_episode_steps`` (5000), ``physics_steps_per_env_step`` (1),
     ``start`` (ranges of x, y, yaw and z), ``action_scale`` (1.0), ``action`` (mode and ranges;
     "joints"), ``observation`` ("paper"), ``reward`` (terms and weights), ``snake`` (physical
-    parameters over the preset's), ``render_mode`` (None or "rgb_array").
+    parameters over the preset's), ``robot`` (None; or a URDF or robot file, see ``robots/``: then the
+    action holds one value per movable joint in pybullet's joint order, the observation one (angle,
+    velocity) pair per movable joint, and the start places the root link's frame; ``joints`` and
+    ``preset`` are ignored), ``render_mode`` (None or "rgb_array").
 
     **Limits**: positions (start x, y; goals) within 10 km, start heights 0-100 m, reward weights within
     1e6, ``physics_steps_per_env_step`` at most 240, episodes at most 10^7 steps (``snakesim.config.LIMITS``
@@ -97,6 +101,7 @@ class SnakeEnv(gymnasium.Env):
         observation: str = _D["observation"],
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
+        robot: str | os.PathLike[str] | None = _D["robot"],
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -116,6 +121,7 @@ class SnakeEnv(gymnasium.Env):
             observation=observation,
             reward=reward,
             snake=snake,
+            robot=None if robot is None else os.fspath(robot),
         )
         self._config_json = env_config(task=self.task, **self._kwargs)
         self._env = _core.Env(self._config_json)
@@ -262,6 +268,7 @@ class SnakeGoalEnv(SnakeEnv):
         observation: str = _G["observation"],
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
+        robot: str | os.PathLike[str] | None = _G["robot"],
         render_mode: str | None = None,
     ) -> None:
         super().__init__(
@@ -278,6 +285,7 @@ class SnakeGoalEnv(SnakeEnv):
             observation=observation,
             reward=reward,
             snake=snake,
+            robot=robot,
             render_mode=render_mode,
         )
 

@@ -185,6 +185,7 @@ class SnakeLog:
         rewards: bool,
         max_seconds: float = MAX_SECONDS,
         flush_rows: int = 2400,
+        shapes: Sequence[Sequence[Mapping[str, Any]]] | None = None,
     ) -> None:
         rr = _rerun()
         self.rr = rr
@@ -219,15 +220,25 @@ class SnakeLog:
                 fill_mode="solid",
             ),
         )
-        cubes = self.joints + 1
-        log(
-            "world/snake",
-            rr.Boxes3D(
-                half_sizes=np.full((cubes, 3), self.half_extent),
-                colors=[HEAD_COLOR] + [BODY_COLOR] * (cubes - 1),
-                fill_mode="solid",
-            ),
-        )
+        # The built-in snake: one Boxes3D of N + 1 cubes. A robot: one entity per link, moved by its
+        # pose, holding its shapes placed in its centre-of-mass frame.
+        self.shapes = None if shapes is None else [list(link) for link in shapes]
+        if self.shapes is None:
+            self.parts = self.joints + 1
+            log(
+                "world/snake",
+                rr.Boxes3D(
+                    half_sizes=np.full((self.parts, 3), self.half_extent),
+                    colors=[HEAD_COLOR] + [BODY_COLOR] * (self.parts - 1),
+                    fill_mode="solid",
+                ),
+            )
+        else:
+            self.parts = len(self.shapes)
+            for i, link in enumerate(self.shapes):
+                color = HEAD_COLOR if i == 0 else BODY_COLOR
+                for k, shape in enumerate(link):
+                    log(f"world/snake/link{i}/shape{k}", _shape_archetype(rr, shape, color))
         names = [f"j{j}" for j in range(self.joints)]
         for quantity in JOINT_QUANTITIES:
             widths = [1.0 if quantity == "target" else 1.5] * self.joints
@@ -296,7 +307,7 @@ class SnakeLog:
                 f"(LIMITS['recording_seconds'] is {MAX_SECONDS:g})"
             )
         n = self.joints
-        if trace.poses.shape[1:] != (n + 1, 7) or trace.positions.shape[1:] != (n,):
+        if trace.poses.shape[1:] != (self.parts, 7) or trace.positions.shape[1:] != (n,):
             raise RecordingError(
                 f"expected the state of {n} joints, got poses {trace.poses.shape} and angles "
                 f"{trace.positions.shape}"
@@ -335,14 +346,24 @@ class SnakeLog:
             ]
             poses = np.concatenate([t.poses for t in rows])
             k, cubes = poses.shape[:2]
-            self.rec.send_columns(
-                "world/snake",
-                indexes=index,
-                columns=rr.Boxes3D.columns(
-                    centers=poses[:, :, :3].reshape(-1, 3),
-                    quaternions=poses[:, :, 3:7].reshape(-1, 4),
-                ).partition([cubes] * k),
-            )
+            if self.shapes is None:
+                self.rec.send_columns(
+                    "world/snake",
+                    indexes=index,
+                    columns=rr.Boxes3D.columns(
+                        centers=poses[:, :, :3].reshape(-1, 3),
+                        quaternions=poses[:, :, 3:7].reshape(-1, 4),
+                    ).partition([cubes] * k),
+                )
+            else:
+                for i in range(cubes):
+                    self.rec.send_columns(
+                        f"world/snake/link{i}",
+                        indexes=index,
+                        columns=rr.Transform3D.columns(
+                            translation=poses[:, i, :3], quaternion=poses[:, i, 3:7]
+                        ),
+                    )
             for quantity, name in zip(JOINT_QUANTITIES, ("positions", "targets", "velocities", "torques")):
                 values = np.concatenate([getattr(t, name) for t in rows])
                 keep = ~np.isnan(values).any(axis=1)  # a reset's step has no target
@@ -383,11 +404,47 @@ class SnakeLog:
             )
 
 
+def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``v`` rotated by the unit quaternion ``q`` (x, y, z, w)."""
+    u, w = q[:3], q[3]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def _shape_archetype(rr, shape: Mapping[str, Any], color):
+    """A robot's collision shape (``snake-cli run --trace`` metadata) as a Rerun archetype, placed in its
+    link's frame: boxes, spheres (ellipsoids), cylinders and capsules along their z axis."""
+    kind, size = shape["kind"], [float(v) for v in shape["size"]]
+    pose = np.asarray(shape["pose"], dtype=np.float64)
+    center, quaternion = pose[:3], pose[3:7]
+    common = dict(colors=[color], fill_mode="solid")
+    if kind == "box":
+        return rr.Boxes3D(
+            half_sizes=[np.asarray(size) / 2], centers=[center], quaternions=[quaternion], **common
+        )
+    if kind == "sphere":
+        return rr.Ellipsoids3D(
+            half_sizes=[[size[0]] * 3], centers=[center], quaternions=[quaternion], **common
+        )
+    if kind == "cylinder":
+        return rr.Cylinders3D(
+            lengths=[size[1]], radii=[size[0]], centers=[center], quaternions=[quaternion], **common
+        )
+    if kind == "capsule":
+        # Rerun's capsule runs from its origin along +z: start it half a length below the centre.
+        start = center + _rotate(quaternion, np.array([0.0, 0.0, -size[1] / 2]))
+        return rr.Capsules3D(
+            lengths=[size[1]], radii=[size[0]], translations=[start], quaternions=[quaternion], **common
+        )
+    raise RecordingError(f"unknown shape kind {kind!r}")
+
+
 # -- physics traces from snake-cli ----------------------------------------------------------------
-def trace_columns(joints: int) -> list[str]:
-    """The columns of a physics-trace CSV (``snake-cli run --trace``)."""
+def trace_columns(joints: int, parts: int | None = None) -> list[str]:
+    """The columns of a physics-trace CSV (``snake-cli run --trace``): ``parts`` poses (the snake's
+    ``joints + 1`` cubes, or a robot's links) and ``joints`` joints."""
     columns = ["step", "t"]
-    for c in range(joints + 1):
+    for c in range(joints + 1 if parts is None else parts):
         columns += [f"c{c}_{k}" for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]
     for prefix in ("q", "qd", "tau", "target"):
         columns += [f"{prefix}{j}" for j in range(joints)]
@@ -413,11 +470,20 @@ def read_trace_header(path: str | os.PathLike) -> tuple[dict[str, Any], list[str
         meta = json.loads(first[len(prefix) :])
         joints = int(meta["joints"])
         dt = float(meta["dt"])
+        parts = int(meta.get("parts", joints + 1))
+        shapes = meta.get("shapes")
+        if shapes is not None and len(shapes) != parts:
+            raise ValueError(f"{len(shapes)} shape lists for {parts} parts")
     except (ValueError, KeyError, TypeError) as error:
         raise RecordingError(f"{path}: malformed physics-trace metadata ({error})") from None
-    if not (1 <= joints <= LIMITS["joints"] and math.isfinite(dt) and dt > 0):
-        raise RecordingError(f"{path}: joints {joints} or dt {dt} out of range")
-    if header != trace_columns(joints):
+    if not (
+        1 <= joints <= LIMITS["joints"]
+        and 1 <= parts <= LIMITS["joints"] + 1
+        and math.isfinite(dt)
+        and dt > 0
+    ):
+        raise RecordingError(f"{path}: joints {joints}, parts {parts} or dt {dt} out of range")
+    if header != trace_columns(joints, parts):
         raise RecordingError(f"{path}: the column header does not match a {joints}-joint physics trace")
     return meta, header
 
@@ -426,6 +492,7 @@ def read_trace(path: str | os.PathLike, rows: int = 2400) -> tuple[dict[str, Any
     """A physics-trace CSV's metadata and its rows in blocks of ``rows`` (memory stays bounded)."""
     meta, header = read_trace_header(path)
     n = int(meta["joints"])
+    parts = int(meta.get("parts", n + 1))
 
     def blocks() -> Iterator[Trace]:
         with open(path, encoding="utf-8") as f:
@@ -451,10 +518,10 @@ def read_trace(path: str | os.PathLike, rows: int = 2400) -> tuple[dict[str, Any
                         f"expected {len(header)}"
                     )
                 line += len(raw)
-                c = 2 + 7 * (n + 1)
+                c = 2 + 7 * parts
                 yield Trace(
                     steps=data[:, 0].astype(np.int64),
-                    poses=data[:, 2:c].reshape(-1, n + 1, 7),
+                    poses=data[:, 2:c].reshape(-1, parts, 7),
                     positions=data[:, c : c + n],
                     velocities=data[:, c + n : c + 2 * n],
                     torques=data[:, c + 2 * n : c + 3 * n],
@@ -476,6 +543,7 @@ def log_trace(recording, path: str | os.PathLike) -> int:
         half_extent=float(meta.get("half_extent", 0.25)),
         config=meta,
         rewards=False,
+        shapes=meta.get("shapes"),
     )
     log.start_episode()
     count = 0

@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 import gymnasium
 
 from snakesim.env import SnakeEnv
 from snakesim.rerun_log import MAX_SECONDS, RecordingError, SnakeLog, Trace, _rerun
+
+
+def _robot_shapes(env: SnakeEnv) -> list | None:
+    """The shapes of each link of the env's robot, or None for the built-in snake."""
+    shapes = env._env.robot_shapes()
+    return None if shapes is None else json.loads(shapes)
 
 
 class RerunLogger(gymnasium.Wrapper):
@@ -69,6 +76,7 @@ class RerunLogger(gymnasium.Wrapper):
             rewards=True,
             max_seconds=max_seconds,
             flush_rows=max(1, round(flush_seconds / self._dt)),
+            shapes=_robot_shapes(base),
         )
         self._stopped = False
 

@@ -1,0 +1,609 @@
+//! Robots described by a URDF file, on the paper's ground plane, driven as a pybullet user drives them.
+//!
+//! A [`RobotSpec`] is a parsed URDF plus what pybullet users set in code: anisotropic friction (whole
+//! robot or per link), motor gains and the start pose. It comes from a URDF file alone or from a small
+//! YAML robot file around one ([`RobotFile`]). A [`Robot`] is that robot in a world of its own, built in
+//! the order of a pybullet script (docs/parity.md, "URDF robots"):
+//!
+//! ```python
+//! p.createMultiBody(0, p.createCollisionShape(p.GEOM_PLANE))
+//! robot = p.loadURDF(urdf, [x, y, z], p.getQuaternionFromEuler([0, 0, yaw]))  # flags for --inertia file
+//! p.setGravity(0, 0, -9.81)
+//! for link in [-1] + list(range(p.getNumJoints(robot))):
+//!     p.changeDynamics(robot, link, anisotropicFriction=...)  # only where the robot file sets it
+//! # every step:
+//! p.setJointMotorControlArray(robot, movable, p.POSITION_CONTROL, targetPositions=targets,
+//!                             forces=[effort of each joint], positionGains=[kp] * M, velocityGains=[kd] * M)
+//! p.stepSimulation()
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{invalid, Error, Result};
+use crate::gait::{Gait, LateralUndulation};
+use crate::limits::MAX_URDF_BYTES;
+use crate::math::StartPose;
+use crate::urdf::{Geometry, InertiaSource, UrdfRobot};
+use crate::world::{BaseState, BodyId, Dynamics, Pose, World};
+use crate::{Snake, SnakeConfig};
+
+/// pybullet's default position gain of `setJointMotorControlArray`.
+pub const DEFAULT_KP: f64 = 0.1;
+/// pybullet's default velocity gain.
+pub const DEFAULT_KD: f64 = 1.0;
+
+/// Motor gains of a robot file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Motors {
+    /// Position gain (pybullet's positionGains), default 0.1.
+    pub kp: f64,
+    /// Velocity gain (pybullet's velocityGains), default 1.0.
+    pub kd: f64,
+}
+
+impl Default for Motors {
+    fn default() -> Self {
+        Motors {
+            kp: DEFAULT_KP,
+            kd: DEFAULT_KD,
+        }
+    }
+}
+
+/// Settings of one link in a robot file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkSettings {
+    /// `changeDynamics(anisotropicFriction=...)` of this link (overrides the robot's).
+    pub anisotropic_friction: [f64; 3],
+}
+
+/// A robot file: a small YAML around a URDF. Every key but `urdf` may be left out.
+///
+/// ```yaml
+/// urdf: yaw-pitch-16.urdf          # relative to this file
+/// start: [0, 0, 0.03, 0]           # x, y, z (root link frame, m), yaw (rad); pybullet's default 0, 0, 0, 0
+/// inertia: shapes                  # or file (URDF_USE_INERTIA_FROM_FILE)
+/// motors: {kp: 0.1, kd: 1.0}       # pybullet's defaults
+/// anisotropic_friction: [1, 0.01, 0.01]   # every link, in its own frame
+/// links:                           # per link, by URDF name
+///   head: {anisotropic_friction: [1, 1, 1]}
+/// gait: {segment_length: 0.0635, wave_length: 0.5, amplitude: 0.6}   # the sine gait's wave
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotFile {
+    /// The URDF, relative to the robot file.
+    pub urdf: PathBuf,
+    /// Start pose `[x, y, z, yaw]` of the root link's frame.
+    #[serde(default)]
+    pub start: Option<[f64; 4]>,
+    /// Where inertias come from.
+    #[serde(default)]
+    pub inertia: InertiaSource,
+    /// Motor gains.
+    #[serde(default)]
+    pub motors: Motors,
+    /// Anisotropic friction of every link (pybullet's `changeDynamics(anisotropicFriction=...)`).
+    #[serde(default)]
+    pub anisotropic_friction: Option<[f64; 3]>,
+    /// Per-link settings by URDF link name.
+    #[serde(default)]
+    pub links: BTreeMap<String, LinkSettings>,
+    /// Parameters of the sine gait (`--gait sine`) for this robot; left out, pybullet's snake.py wave.
+    #[serde(default)]
+    pub gait: Option<LateralUndulation>,
+}
+
+/// Everything needed to build a [`Robot`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotSpec {
+    /// The parsed URDF.
+    pub urdf: UrdfRobot,
+    /// Where inertias come from.
+    pub inertia: InertiaSource,
+    /// Motor gains.
+    pub motors: Motors,
+    /// Anisotropic friction per link in pybullet's order (index 0: the root); `None` leaves Bullet's.
+    pub anisotropic_friction: Vec<Option<[f64; 3]>>,
+    /// The start pose the robot file names, if any.
+    pub start: Option<StartPose>,
+    /// The file it was read from.
+    pub source: PathBuf,
+    /// The sine gait's parameters for this robot (snake.py's when `None`).
+    pub gait: Option<LateralUndulation>,
+}
+
+fn check_friction(file: &str, key: &str, a: [f64; 3]) -> Result<()> {
+    if a.iter().all(|v| v.is_finite() && *v >= 0.0) {
+        Ok(())
+    } else {
+        Err(invalid(format!(
+            "{file}: {key} must be three finite numbers >= 0, got {a:?}"
+        )))
+    }
+}
+
+impl RobotSpec {
+    /// Reads a robot: a `.urdf` file alone (pybullet's defaults for everything else) or a `.yaml` /
+    /// `.yml` robot file.
+    pub fn load(path: &Path) -> Result<Self> {
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("urdf") => Self::from_urdf(UrdfRobot::load(path)?, path),
+            Some("yaml") | Some("yml") => Self::from_robot_file(path),
+            _ => Err(invalid(format!(
+                "{}: a robot is a .urdf file or a .yaml robot file",
+                path.display()
+            ))),
+        }
+    }
+
+    fn from_urdf(urdf: UrdfRobot, path: &Path) -> Result<Self> {
+        let n = urdf.links.len();
+        Ok(RobotSpec {
+            urdf,
+            inertia: InertiaSource::Shapes,
+            motors: Motors::default(),
+            anisotropic_friction: vec![None; n],
+            start: None,
+            source: path.to_path_buf(),
+            gait: None,
+        })
+    }
+
+    fn from_robot_file(path: &Path) -> Result<Self> {
+        let shown = path.display().to_string();
+        let meta =
+            std::fs::metadata(path).map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
+        if meta.len() > MAX_URDF_BYTES {
+            return Err(invalid(format!(
+                "{shown}: too large ({} bytes)",
+                meta.len()
+            )));
+        }
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
+        let file: RobotFile = serde_norway::from_str(&text)
+            .map_err(|e| invalid(format!("{shown}: {}", e.to_string().replace('\n', " "))))?;
+        let urdf_path = path
+            .parent()
+            .unwrap_or_else(|| Path::new(""))
+            .join(&file.urdf);
+        let urdf = UrdfRobot::load(&urdf_path)?;
+        let m = file.motors;
+        if !(m.kp.is_finite() && m.kp >= 0.0 && m.kd.is_finite() && m.kd >= 0.0) {
+            return Err(invalid(format!(
+                "{shown}: motors: kp and kd must be finite and >= 0, got {} and {}",
+                m.kp, m.kd
+            )));
+        }
+        let mut friction = vec![file.anisotropic_friction; urdf.links.len()];
+        if let Some(a) = file.anisotropic_friction {
+            check_friction(&shown, "anisotropic_friction", a)?;
+        }
+        for (name, settings) in &file.links {
+            let k = urdf
+                .links
+                .iter()
+                .position(|l| &l.name == name)
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "{shown}: links: {name}: no such link in {}",
+                        urdf_path.display()
+                    ))
+                })?;
+            check_friction(
+                &shown,
+                &format!("links: {name}: anisotropic_friction"),
+                settings.anisotropic_friction,
+            )?;
+            friction[k] = Some(settings.anisotropic_friction);
+        }
+        if let Some(g) = &file.gait {
+            g.validate()
+                .map_err(|e| invalid(format!("{shown}: gait: {e}")))?;
+        }
+        let start = file
+            .start
+            .map(|[x, y, z, yaw]| {
+                let s = StartPose { x, y, z, yaw };
+                s.validate()
+                    .map_err(|e| invalid(format!("{shown}: start: {e}")))?;
+                Ok::<_, Error>(s)
+            })
+            .transpose()?;
+        Ok(RobotSpec {
+            urdf,
+            inertia: file.inertia,
+            motors: m,
+            anisotropic_friction: friction,
+            start,
+            source: path.to_path_buf(),
+            gait: file.gait,
+        })
+    }
+
+    /// Names of the movable joints, in pybullet's joint order.
+    pub fn joint_names(&self) -> Vec<&str> {
+        self.urdf
+            .movable_joints()
+            .into_iter()
+            .map(|j| self.urdf.joint(j).expect("movable joint").name.as_str())
+            .collect()
+    }
+
+    /// Positions, among the movable joints, of the actuated ones (URDF effort > 0); a joint of effort 0
+    /// (a passive wheel) is driven with force 0, which leaves it free. The gait's wave runs over the
+    /// actuated joints in order.
+    pub fn actuated_joints(&self) -> Vec<usize> {
+        self.urdf
+            .movable_joints()
+            .into_iter()
+            .enumerate()
+            .filter(|(_, j)| self.urdf.joint(*j).expect("movable joint").effort > 0.0)
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    /// Every body part's shapes as Bullet places them (see [`Robot::drawing`]), from a robot built
+    /// for the purpose.
+    pub fn drawing(&self) -> Result<Vec<Vec<ShapeDrawing>>> {
+        Robot::new(self, self.default_start())?.drawing(self)
+    }
+
+    /// The start pose: the robot file's, else pybullet's default (the origin, yaw 0).
+    pub fn default_start(&self) -> StartPose {
+        self.start.unwrap_or(StartPose {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            yaw: 0.0,
+        })
+    }
+}
+
+/// A gait on a robot's joints: the gait's wave over the actuated joints (URDF effort > 0) in order,
+/// target 0 on the passive ones. This is what `snake-cli run --robot ... --gait sine` sets.
+#[derive(Debug, Clone)]
+pub struct RobotGait<G> {
+    gait: G,
+    actuated: Vec<usize>,
+    wave: Vec<f64>,
+}
+
+impl<G: Gait> RobotGait<G> {
+    /// `gait` on `spec`'s actuated joints.
+    pub fn new(gait: G, spec: &RobotSpec) -> Self {
+        let actuated = spec.actuated_joints();
+        RobotGait {
+            gait,
+            wave: vec![0.0; actuated.len()],
+            actuated,
+        }
+    }
+}
+
+impl<G: Gait> Gait for RobotGait<G> {
+    /// `targets` holds one value per movable joint.
+    fn next_targets(&mut self, targets: &mut [f64]) {
+        self.gait.next_targets(&mut self.wave);
+        for (&j, &v) in self.actuated.iter().zip(&self.wave) {
+            targets[j] = v;
+        }
+    }
+
+    fn reset(&mut self) {
+        self.gait.reset();
+    }
+}
+
+/// A simulated body the command line and the tests drive: the built-in snake or a URDF robot.
+pub trait Simulation {
+    /// Number of driven (movable) joints.
+    fn joints(&self) -> usize;
+    /// Physics steps taken.
+    fn steps(&self) -> u64;
+    /// Simulated seconds.
+    fn time(&self) -> f64;
+    /// Pose and velocity of the base (root link's centre of mass).
+    fn base_state(&self) -> Result<BaseState>;
+    /// Angles and velocities of the driven joints (either slice may be empty).
+    fn read_joints(&self, positions: &mut [f64], velocities: &mut [f64]) -> Result<()>;
+    /// Position targets of the driven joints, radians (metres for prismatic joints).
+    fn set_targets(&mut self, targets: &[f64]) -> Result<()>;
+    /// One physics step.
+    fn step(&mut self) -> Result<()>;
+    /// World poses of every body part: the base, then each link.
+    fn body_poses(&self) -> Result<Vec<Pose>>;
+    /// Angles, velocities and motor torques of the driven joints (any slice may be empty).
+    fn read_joint_states(
+        &self,
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()>;
+    /// Seconds per physics step.
+    fn dt(&self) -> f64;
+}
+
+impl Simulation for Snake {
+    fn joints(&self) -> usize {
+        Snake::joints(self)
+    }
+    fn steps(&self) -> u64 {
+        Snake::steps(self)
+    }
+    fn time(&self) -> f64 {
+        Snake::time(self)
+    }
+    fn base_state(&self) -> Result<BaseState> {
+        Snake::base_state(self)
+    }
+    fn read_joints(&self, positions: &mut [f64], velocities: &mut [f64]) -> Result<()> {
+        Snake::read_joints(self, positions, velocities)
+    }
+    fn set_targets(&mut self, targets: &[f64]) -> Result<()> {
+        Snake::set_targets(self, targets)
+    }
+    fn step(&mut self) -> Result<()> {
+        Snake::step(self)
+    }
+    fn body_poses(&self) -> Result<Vec<Pose>> {
+        self.cube_poses()
+    }
+    fn read_joint_states(
+        &self,
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()> {
+        self.world()
+            .read_joints(self.body(), positions, velocities, torques)
+    }
+    fn dt(&self) -> f64 {
+        self.config().dt
+    }
+}
+
+/// A URDF robot on the ground plane (see the module docs for the order it is built in).
+#[derive(Debug)]
+pub struct Robot {
+    world: World,
+    body: BodyId,
+    movable: Vec<i32>,
+    efforts: Vec<f64>,
+    motors: Motors,
+    dt: f64,
+    steps: u64,
+}
+
+impl Robot {
+    /// Builds the world and loads the robot with its root link frame at `start`.
+    pub fn new(spec: &RobotSpec, start: StartPose) -> Result<Self> {
+        start.validate()?;
+        let defaults = SnakeConfig::default();
+        let mut world = World::new()?;
+        world.set_time_step(defaults.dt)?;
+        world.add_plane()?;
+        let body = world.add_urdf(
+            &spec.urdf,
+            [start.x, start.y, start.z],
+            start.orientation(),
+            spec.inertia,
+        )?;
+        world.set_gravity(Vector3::new(0.0, 0.0, defaults.gravity))?;
+        for (k, friction) in spec.anisotropic_friction.iter().enumerate() {
+            if let Some(a) = friction {
+                let d = Dynamics {
+                    anisotropic_friction: Some(*a),
+                    ..Dynamics::default()
+                };
+                world.change_dynamics(body, k.checked_sub(1), &d)?;
+            }
+        }
+        let joints = spec.urdf.movable_joints();
+        let efforts = joints
+            .iter()
+            .map(|&j| spec.urdf.joint(j).expect("movable joint").effort)
+            .collect();
+        Ok(Robot {
+            world,
+            body,
+            movable: joints.iter().map(|&j| j as i32).collect(),
+            efforts,
+            motors: spec.motors,
+            dt: defaults.dt,
+            steps: 0,
+        })
+    }
+
+    /// The underlying world.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The underlying world, mutable.
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
+    }
+
+    /// The robot's body in [`Robot::world`].
+    pub fn body(&self) -> BodyId {
+        self.body
+    }
+
+    /// pybullet joint indices of the movable joints.
+    pub fn movable_joints(&self) -> &[i32] {
+        &self.movable
+    }
+}
+
+impl Simulation for Robot {
+    fn joints(&self) -> usize {
+        self.movable.len()
+    }
+    fn steps(&self) -> u64 {
+        self.steps
+    }
+    fn time(&self) -> f64 {
+        self.steps as f64 * self.dt
+    }
+    fn base_state(&self) -> Result<BaseState> {
+        self.world.base_state(self.body)
+    }
+    fn read_joints(&self, positions: &mut [f64], velocities: &mut [f64]) -> Result<()> {
+        Simulation::read_joint_states(self, positions, velocities, &mut [])
+    }
+    fn set_targets(&mut self, targets: &[f64]) -> Result<()> {
+        if targets.len() != self.movable.len() {
+            return Err(invalid(format!(
+                "expected {} joint targets, got {}",
+                self.movable.len(),
+                targets.len()
+            )));
+        }
+        self.world.set_position_targets_at(
+            self.body,
+            &self.movable,
+            targets,
+            &self.efforts,
+            self.motors.kp,
+            self.motors.kd,
+        )
+    }
+    fn step(&mut self) -> Result<()> {
+        self.world.step()?;
+        self.steps += 1;
+        let base = self.world.base_state(self.body)?;
+        let ok = base.pose.position.iter().all(|v| v.is_finite())
+            && base.pose.orientation.coords.iter().all(|v| v.is_finite());
+        if !ok {
+            return Err(Error::NonFinite(format!(
+                "base pose after step {} is {:?}",
+                self.steps, base.pose
+            )));
+        }
+        Ok(())
+    }
+    fn body_poses(&self) -> Result<Vec<Pose>> {
+        let mut poses = vec![self.base_state()?.pose];
+        poses.extend(self.world.link_poses(self.body)?);
+        Ok(poses)
+    }
+    fn read_joint_states(
+        &self,
+        positions: &mut [f64],
+        velocities: &mut [f64],
+        torques: &mut [f64],
+    ) -> Result<()> {
+        self.world
+            .read_joints_at(self.body, &self.movable, positions, velocities, torques)
+    }
+    fn dt(&self) -> f64 {
+        self.dt
+    }
+}
+
+/// One collision shape as a viewer draws it, in its link's centre-of-mass frame.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ShapeDrawing {
+    /// box, sphere, cylinder or capsule (cylinders and capsules along their z axis).
+    pub kind: &'static str,
+    /// Box: full extents; sphere: radius, 0, 0; cylinder and capsule: radius, length, 0.
+    pub size: [f64; 3],
+    /// Centre and orientation: x, y, z, qx, qy, qz, qw.
+    pub pose: [f64; 7],
+}
+
+impl Robot {
+    /// Every body part's shapes (the root first, then each link), as Bullet placed them: for viewers.
+    pub fn drawing(&self, spec: &RobotSpec) -> Result<Vec<Vec<ShapeDrawing>>> {
+        spec.urdf
+            .links
+            .iter()
+            .enumerate()
+            .map(|(k, link)| {
+                let poses = self.world.shape_poses(self.body, k.checked_sub(1))?;
+                Ok(link
+                    .collisions
+                    .iter()
+                    .zip(poses)
+                    .map(|(c, p)| {
+                        let (kind, size) = match c.geometry {
+                            Geometry::Box(s) => ("box", s),
+                            Geometry::Sphere(r) => ("sphere", [r, 0.0, 0.0]),
+                            Geometry::Cylinder { radius, length } => {
+                                ("cylinder", [radius, length, 0.0])
+                            }
+                            Geometry::Capsule { radius, length } => {
+                                ("capsule", [radius, length, 0.0])
+                            }
+                        };
+                        let q = p.orientation.coords;
+                        let x = p.position;
+                        ShapeDrawing {
+                            kind,
+                            size,
+                            pose: [x.x, x.y, x.z, q.x, q.y, q.z, q.w],
+                        }
+                    })
+                    .collect())
+            })
+            .collect()
+    }
+}
+
+/// A robot named by its file, as an [`EnvConfig`](crate::EnvConfig) holds it: serialised as the path,
+/// loaded (and checked) when deserialised or made with [`RobotRef::load`].
+#[derive(Debug, Clone)]
+pub struct RobotRef {
+    path: PathBuf,
+    spec: Arc<RobotSpec>,
+}
+
+impl RobotRef {
+    /// Reads a robot (`.urdf` or robot file) and checks that it can be built.
+    pub fn load(path: &Path) -> Result<Self> {
+        let spec = RobotSpec::load(path)?;
+        spec.urdf.check_inertia(spec.inertia)?;
+        Ok(RobotRef {
+            path: path.to_path_buf(),
+            spec: Arc::new(spec),
+        })
+    }
+
+    /// The file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The robot.
+    pub fn spec(&self) -> &RobotSpec {
+        &self.spec
+    }
+}
+
+impl PartialEq for RobotRef {
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path && self.spec == other.spec
+    }
+}
+
+impl Serialize for RobotRef {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        self.path.serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for RobotRef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let path = PathBuf::deserialize(d)?;
+        RobotRef::load(&path).map_err(serde::de::Error::custom)
+    }
+}
