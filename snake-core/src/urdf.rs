@@ -269,7 +269,7 @@ impl UrdfRobot {
     pub fn check_inertia(&self, source: InertiaSource) -> Result<()> {
         for (k, link) in self.links.iter().enumerate() {
             let rotating = match &link.joint {
-                None => link.inertial.map_or(true, |i| i.mass > 0.0),
+                None => link.inertial.is_none_or(|i| i.mass > 0.0),
                 Some(j) => matches!(j.kind, JointKind::Revolute | JointKind::Continuous),
             };
             if !rotating {
