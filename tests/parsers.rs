@@ -37,6 +37,8 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
     match target {
         "model_file" => paths.extend(files("models", Some("safetensors"))),
         "run_config" => paths.extend(files("snake-py/configs", Some("yaml"))),
+        "urdf" => paths.extend(files("robots", Some("urdf"))),
+        "robot_file" => paths.extend(files("robots", Some("yaml"))),
         _ => {}
     }
     assert!(!paths.is_empty(), "no seeds for {target}");
@@ -48,11 +50,19 @@ fn check(target: &str, bytes: &[u8]) {
         "model_file" => checks::model_file(bytes),
         "run_config" => checks::run_config(bytes),
         "env_keywords" => checks::env_keywords(bytes),
+        "urdf" => checks::urdf(bytes),
+        "robot_file" => checks::robot_file(bytes),
         _ => unreachable!("{target}"),
     }
 }
 
-const TARGETS: [&str; 3] = ["model_file", "run_config", "env_keywords"];
+const TARGETS: [&str; 5] = [
+    "model_file",
+    "run_config",
+    "env_keywords",
+    "urdf",
+    "robot_file",
+];
 
 #[test]
 fn the_seeds_parse() {
@@ -63,6 +73,17 @@ fn the_seeds_parse() {
         let text = std::str::from_utf8(&bytes).unwrap();
         let layer = snake_rl::config::parse_yaml(text).expect("a shipped config parses");
         snake_rl::config::RunConfig::from_layers(&[layer]).expect("a shipped config is valid");
+    }
+    for bytes in seeds("urdf") {
+        let text = std::str::from_utf8(&bytes).unwrap();
+        let robot =
+            snake_core::urdf::UrdfRobot::parse(text, "seed").expect("a shipped URDF parses");
+        robot
+            .check_inertia(snake_core::urdf::InertiaSource::Shapes)
+            .expect("a shipped URDF builds");
+    }
+    for path in files("robots", Some("yaml")) {
+        snake_core::RobotRef::load(&path).expect("a shipped robot file loads");
     }
     for bytes in seeds("env_keywords") {
         let serde_json::Value::Object(k) = serde_json::from_slice(&bytes).unwrap() else {
@@ -128,6 +149,18 @@ proptest! {
     fn an_edited_run_config_is_a_config_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
         let all = seeds("run_config");
         checks::run_config(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+
+    #[test]
+    fn an_edited_urdf_is_a_robot_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("urdf");
+        checks::urdf(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+
+    #[test]
+    fn an_edited_robot_file_is_a_robot_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("robot_file");
+        checks::robot_file(&apply(all[seed.index(all.len())].clone(), &e));
     }
 
     #[test]

@@ -6,6 +6,9 @@
 use std::path::Path;
 
 use serde_json::Value;
+use snake_core::robot::{Robot, RobotSpec, Simulation};
+use snake_core::urdf::{InertiaSource, UrdfRobot};
+use snake_core::StartPose;
 use snake_rl::config::{env_from_keywords, parse_yaml, RunConfig};
 use snake_rl::model::{parse_checkpoint, parse_policy};
 
@@ -54,4 +57,79 @@ pub fn env_keywords(bytes: &[u8]) {
     if let Err(e) = env_from_keywords(&keywords) {
         one_line(&e.0);
     }
+}
+
+/// A robot that parsed and passed its checks is built in Bullet and stepped: a file that makes the
+/// engine abort, or turn the state non-finite silently, is the worst a crafted robot could do.
+fn build_and_step(spec: &RobotSpec) {
+    let start = StartPose {
+        z: 1.0,
+        ..StartPose::resting(0.25)
+    };
+    let Ok(mut robot) = Robot::new(spec, start) else {
+        return;
+    };
+    let targets = vec![0.3; robot.joints()];
+    for _ in 0..8 {
+        if robot
+            .set_targets(&targets)
+            .and_then(|()| robot.step())
+            .is_err()
+        {
+            return;
+        }
+    }
+}
+
+/// A URDF file (`snake-cli run --robot x.urdf`, a robot file's `urdf:`): parsed, its inertias checked
+/// both ways pybullet reads them, and built when they pass.
+pub fn urdf(bytes: &[u8]) {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return;
+    };
+    match UrdfRobot::parse(text, "fuzzed.urdf") {
+        Ok(robot) => {
+            for source in [InertiaSource::Shapes, InertiaSource::File] {
+                if let Err(e) = robot.check_inertia(source) {
+                    one_line(&e.to_string());
+                }
+            }
+            if robot.check_inertia(InertiaSource::Shapes).is_ok() {
+                with_file("fuzzed.urdf", bytes, |path| match RobotSpec::load(path) {
+                    Ok(spec) => build_and_step(&spec),
+                    Err(e) => one_line(&e.to_string()),
+                });
+            }
+        }
+        Err(e) => one_line(&e.to_string()),
+    }
+}
+
+/// A robot file (YAML around a URDF: motors, friction, start, gait), next to the shipped paper-cubes-5
+/// URDF that it may name.
+pub fn robot_file(bytes: &[u8]) {
+    let urdf = include_bytes!("../../robots/paper-cubes-5.urdf");
+    with_file("paper-cubes-5.urdf", urdf, |_| {
+        with_file("fuzzed.yaml", bytes, |path| match RobotSpec::load(path) {
+            Ok(spec) => {
+                if spec.urdf.check_inertia(spec.inertia).is_ok() {
+                    build_and_step(&spec);
+                }
+            }
+            Err(e) => one_line(&e.to_string()),
+        })
+    });
+}
+
+/// Calls `f` with the path of a file named `name`, holding `bytes`, in this process's own scratch
+/// folder (robot files name their URDF relative to themselves).
+fn with_file(name: &str, bytes: &[u8], f: impl FnOnce(&Path)) {
+    let folder = std::env::temp_dir().join(format!("snakesim-fuzz-{}", std::process::id()));
+    std::fs::create_dir_all(&folder).expect("a scratch folder");
+    let path = folder.join(name);
+    std::fs::write(&path, bytes).expect("a scratch file");
+    f(&path);
+    // Nothing left behind: the file, then the folder once the outermost call's file is gone too.
+    let _ = std::fs::remove_file(&path);
+    let _ = std::fs::remove_dir(&folder);
 }

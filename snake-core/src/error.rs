@@ -37,7 +37,26 @@ pub(crate) fn check(code: i32) -> Result<()> {
     Err(Error::Engine { code, message })
 }
 
-/// An `InvalidArgument` error from anything printable.
+/// An `InvalidArgument` error from anything printable, as one line (see [`one_line`]).
 pub(crate) fn invalid(message: impl Into<String>) -> Error {
-    Error::InvalidArgument(message.into())
+    Error::InvalidArgument(one_line(message.into()))
+}
+
+/// A message as one line, whatever the user's files and values hold: control characters (a newline
+/// inside an XML attribute, a YAML key or a model's metadata, say) are written escaped, as Rust
+/// writes them. Every error of snake-core and snake-rl that quotes a user's input goes through it.
+pub fn one_line(message: String) -> String {
+    if !message.chars().any(char::is_control) {
+        return message;
+    }
+    message
+        .chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }

@@ -54,23 +54,8 @@
 //! not arithmetic, makes the difference at these sizes.
 #![deny(missing_docs)]
 
-/// A message as one line, whatever the user's keys, values and files hold: control characters (a
-/// newline inside a YAML key or a model's metadata, say) are written escaped, as Rust writes them.
-pub(crate) fn one_line(message: String) -> String {
-    if !message.chars().any(char::is_control) {
-        return message;
-    }
-    message
-        .chars()
-        .map(|c| {
-            if c.is_control() {
-                c.escape_default().to_string()
-            } else {
-                c.to_string()
-            }
-        })
-        .collect()
-}
+/// See [`snake_core::error::one_line`].
+pub(crate) use snake_core::error::one_line;
 
 pub mod bench;
 pub mod buffer;
