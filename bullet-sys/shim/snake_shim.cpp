@@ -89,6 +89,25 @@ struct ss_world {
 
 namespace {
 
+// pybullet's createJointMotors (PSCP 3117): a velocity-0 motor with max impulse 1 on every revolute
+// (continuous included) and prismatic joint, in link order, owned by the world.
+void add_default_motors(ss_world* w, btMultiBody* body) {
+    for (int k = 0; k < body->getNumLinks(); ++k) {
+        int type = body->getLink(k).m_jointType;
+        if (type != btMultibodyLink::eRevolute && type != btMultibodyLink::ePrismatic) continue;
+        float max_motor_impulse = 1.f;
+        btScalar desired_velocity = 0.f;
+        auto motor = std::unique_ptr<btMultiBodyJointMotor>(
+            new btMultiBodyJointMotor(body, k, 0, desired_velocity, max_motor_impulse));
+        motor->setPositionTarget(0, 0);
+        motor->setVelocityTarget(0, 1);
+        body->getLink(k).m_userPtr = motor.get();
+        w->world->addMultiBodyConstraint(motor.get());
+        motor->finalizeMultiDof();
+        w->constraints.push_back(std::move(motor));
+    }
+}
+
 // The pybullet programmatic-body conversion (ConvertURDF2BulletInternal, U2B 202-768, and the
 // post-processing in ConvertURDF2Bullet, U2B 868-895) for a body whose links all use `shape`, whose
 // inertial frames are the identity, and whose joints are revolute. `link_*` arrays are in pybullet's
@@ -198,20 +217,8 @@ int build_multibody(ss_world* w, btCollisionShape* shape, double base_mass, cons
     body->updateCollisionObjectWorldTransforms(scratch_q, scratch_m);
     w->world->addMultiBody(body);
 
-    // createJointMotors (PSCP 3117): a velocity-0 motor with max impulse 1 on every revolute joint.
-    for (int k = 0; k < body->getNumLinks(); ++k) {
-        if (body->getLink(k).m_jointType != btMultibodyLink::eRevolute) continue;
-        float max_motor_impulse = 1.f;
-        btScalar desired_velocity = 0.f;
-        auto motor = std::unique_ptr<btMultiBodyJointMotor>(
-            new btMultiBodyJointMotor(body, k, 0, desired_velocity, max_motor_impulse));
-        motor->setPositionTarget(0, 0);
-        motor->setVelocityTarget(0, 1);
-        body->getLink(k).m_userPtr = motor.get();
-        w->world->addMultiBodyConstraint(motor.get());
-        motor->finalizeMultiDof();
-        w->constraints.push_back(std::move(motor));
-    }
+    // createJointMotors (PSCP 3117); the cube snake's joints are all revolute.
+    add_default_motors(w, body);
 
     *body_out = (int)w->bodies.size();
     w->bodies.push_back(std::move(mb));
@@ -536,21 +543,8 @@ int build_urdf(ss_world* w, const ss_urdf_desc* d, int* body_out) {
     w->world->addMultiBody(body);
     for (auto& c : limits) w->constraints.push_back(std::move(c));
 
-    // createJointMotors (PSCP 3117): revolute (continuous included) and prismatic joints.
-    for (int k = 0; k < body->getNumLinks(); ++k) {
-        int type = body->getLink(k).m_jointType;
-        if (type != btMultibodyLink::eRevolute && type != btMultibodyLink::ePrismatic) continue;
-        float max_motor_impulse = 1.f;
-        btScalar desired_velocity = 0.f;
-        auto motor = std::unique_ptr<btMultiBodyJointMotor>(
-            new btMultiBodyJointMotor(body, k, 0, desired_velocity, max_motor_impulse));
-        motor->setPositionTarget(0, 0);
-        motor->setVelocityTarget(0, 1);
-        body->getLink(k).m_userPtr = motor.get();
-        w->world->addMultiBodyConstraint(motor.get());
-        motor->finalizeMultiDof();
-        w->constraints.push_back(std::move(motor));
-    }
+    // createJointMotors (PSCP 3117).
+    add_default_motors(w, body);
 
     *body_out = (int)w->bodies.size();
     w->bodies.push_back(std::move(owned));

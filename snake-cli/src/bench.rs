@@ -83,20 +83,10 @@ pub(crate) fn find_python(explicit: Option<&Path>) -> Option<PathBuf> {
     [here, repo].into_iter().find(|p| p.exists())
 }
 
-fn pybullet_rates(python: &Path, args: &BenchArgs) -> Result<serde_json::Value> {
-    let joints: Vec<String> = args.joints.iter().map(|j| j.to_string()).collect();
-    let script = pybullet_bench_script();
-    if !script.exists() {
-        bail!(
-            "{} is missing (run bench from a snakesim checkout)",
-            script.display()
-        );
-    }
-    let out = Command::new(python)
-        .arg(&script)
-        .arg(joints.join(","))
-        .arg(args.steps.to_string())
-        .arg(args.repeats.to_string())
+/// Runs a pybullet benchmark script and reads the JSON it prints last (pybullet prints its own banner
+/// lines first); its last stderr line when it fails.
+fn run_reference(python: &Path, command: &mut Command) -> Result<serde_json::Value> {
+    let out = command
         .output()
         .with_context(|| format!("cannot run {}", python.display()))?;
     if !out.status.success() {
@@ -106,14 +96,32 @@ fn pybullet_rates(python: &Path, args: &BenchArgs) -> Result<serde_json::Value> 
             stderr.lines().last().unwrap_or("no output")
         );
     }
-    // pybullet prints its own banner lines; the JSON is the last line.
     let stdout = String::from_utf8_lossy(&out.stdout);
     let line = stdout
         .lines()
         .rev()
-        .find(|l| l.starts_with('{'))
+        .find(|l| l.starts_with('{') || l.starts_with('['))
         .unwrap_or("");
     serde_json::from_str(line).context("the pybullet benchmark printed no JSON")
+}
+
+fn pybullet_rates(python: &Path, args: &BenchArgs) -> Result<serde_json::Value> {
+    let joints: Vec<String> = args.joints.iter().map(|j| j.to_string()).collect();
+    let script = pybullet_bench_script();
+    if !script.exists() {
+        bail!(
+            "{} is missing (run bench from a snakesim checkout)",
+            script.display()
+        );
+    }
+    run_reference(
+        python,
+        Command::new(python)
+            .arg(&script)
+            .arg(joints.join(","))
+            .arg(args.steps.to_string())
+            .arg(args.repeats.to_string()),
+    )
 }
 
 /// Steps per second of one robot run replaying `rows` of targets.
@@ -173,26 +181,14 @@ fn pybullet_robot_rates(
     });
     let spec_path = dir.path().join("scenario.json");
     std::fs::write(&spec_path, scenario.to_string()).context("cannot write the scenario")?;
-    let out = Command::new(python)
-        .arg(&script)
-        .arg(&spec_path)
-        .arg(repeats.to_string())
-        .output()
-        .with_context(|| format!("cannot run {}", python.display()))?;
-    if !out.status.success() {
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        bail!(
-            "the pybullet benchmark failed: {}",
-            stderr.lines().last().unwrap_or("no output")
-        );
-    }
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let line = stdout
-        .lines()
-        .rev()
-        .find(|l| l.starts_with('['))
-        .unwrap_or("");
-    serde_json::from_str(line).context("the pybullet benchmark printed no JSON")
+    let rates = run_reference(
+        python,
+        Command::new(python)
+            .arg(&script)
+            .arg(&spec_path)
+            .arg(repeats.to_string()),
+    )?;
+    serde_json::from_value(rates).context("the pybullet benchmark printed no list of rates")
 }
 
 fn bench_robot(args: &BenchArgs, path: &Path) -> Result<()> {

@@ -510,17 +510,10 @@ impl World {
     ) -> Result<()> {
         self.joint_count(body)?;
         let n = joints.len();
-        let out = |s: &mut [f64], what: &str| -> Result<*mut f64> {
-            match s.len() {
-                0 => Ok(std::ptr::null_mut()),
-                len if len == n => Ok(s.as_mut_ptr()),
-                len => Err(invalid(format!("{what}: slice of {len} for {n} joints"))),
-            }
-        };
         let (p, v, t) = (
-            out(positions, "positions")?,
-            out(velocities, "velocities")?,
-            out(torques, "torques")?,
+            out_slice(positions, n, "positions")?,
+            out_slice(velocities, n, "velocities")?,
+            out_slice(torques, n, "torques")?,
         );
         // SAFETY: live world; joints holds n indices and every non-null pointer addresses n f64.
         check(unsafe {
@@ -714,17 +707,10 @@ impl World {
         torques: &mut [f64],
     ) -> Result<()> {
         let n = self.joint_count(body)?;
-        let out = |s: &mut [f64], what: &str| -> Result<*mut f64> {
-            match s.len() {
-                0 => Ok(std::ptr::null_mut()),
-                len if len == n => Ok(s.as_mut_ptr()),
-                len => Err(invalid(format!("{what}: slice of {len} for {n} joints"))),
-            }
-        };
         let (p, v, t) = (
-            out(positions, "positions")?,
-            out(velocities, "velocities")?,
-            out(torques, "torques")?,
+            out_slice(positions, n, "positions")?,
+            out_slice(velocities, n, "velocities")?,
+            out_slice(torques, n, "torques")?,
         );
         // SAFETY: live world; every non-null pointer addresses n writable f64.
         check(unsafe { bullet_sys::ss_get_joint_states(self.ptr(), body.0, n as i32, p, v, t) })
@@ -829,5 +815,15 @@ impl World {
                 normal_force: c.normal_force,
             })
             .collect())
+    }
+}
+
+/// An output slice of `n` joint values for the shim: its pointer, or null for an empty slice (the
+/// caller does not want that quantity).
+fn out_slice(s: &mut [f64], n: usize, what: &str) -> Result<*mut f64> {
+    match s.len() {
+        0 => Ok(std::ptr::null_mut()),
+        len if len == n => Ok(s.as_mut_ptr()),
+        len => Err(invalid(format!("{what}: slice of {len} for {n} joints"))),
     }
 }
