@@ -738,13 +738,7 @@ impl World {
         check(unsafe {
             bullet_sys::ss_get_link_poses(self.ptr(), body.0, n as i32, raw.as_mut_ptr())
         })?;
-        Ok(raw
-            .chunks_exact(7)
-            .map(|c| Pose {
-                position: Vector3::new(c[0], c[1], c[2]),
-                orientation: UnitQuaternion::new_unchecked(Quaternion::new(c[6], c[3], c[4], c[5])),
-            })
-            .collect())
+        Ok(poses_from_shim(&raw))
     }
 
     /// Poses of a link's collision shapes in its centre-of-mass frame (`link` `None`: the base), in
@@ -780,13 +774,7 @@ impl World {
                 &mut count,
             )
         })?;
-        Ok(raw
-            .chunks_exact(7)
-            .map(|c| Pose {
-                position: Vector3::new(c[0], c[1], c[2]),
-                orientation: UnitQuaternion::new_unchecked(Quaternion::new(c[6], c[3], c[4], c[5])),
-            })
-            .collect())
+        Ok(poses_from_shim(&raw))
     }
 
     /// Contact points of the last step that involve `body`.
@@ -826,4 +814,14 @@ fn out_slice(s: &mut [f64], n: usize, what: &str) -> Result<*mut f64> {
         len if len == n => Ok(s.as_mut_ptr()),
         len => Err(invalid(format!("{what}: slice of {len} for {n} joints"))),
     }
+}
+
+/// Poses from the shim's records of 7 values: position x, y, z, then the quaternion x, y, z, w.
+fn poses_from_shim(raw: &[f64]) -> Vec<Pose> {
+    raw.chunks_exact(7)
+        .map(|c| Pose {
+            position: Vector3::new(c[0], c[1], c[2]),
+            orientation: UnitQuaternion::new_unchecked(Quaternion::new(c[6], c[3], c[4], c[5])),
+        })
+        .collect()
 }
