@@ -10,6 +10,10 @@ use proptest::prelude::*;
 
 #[path = "../fuzz/src/checks.rs"]
 mod checks;
+// `snake-cli run --targets`'s parser, the binary's own source file (checks::targets_csv uses it).
+#[path = "../snake-cli/src/targets.rs"]
+#[allow(dead_code)]
+mod targets;
 
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
@@ -52,11 +56,13 @@ fn check(target: &str, bytes: &[u8]) {
         "env_keywords" => checks::env_keywords(bytes),
         "urdf" => checks::urdf(bytes),
         "robot_file" => checks::robot_file(bytes),
+        "targets_csv" => checks::targets_csv(bytes),
         _ => unreachable!("{target}"),
     }
 }
 
-const TARGETS: [&str; 5] = [
+const TARGETS: [&str; 6] = [
+    "targets_csv",
     "model_file",
     "run_config",
     "env_keywords",
@@ -161,6 +167,12 @@ proptest! {
     fn an_edited_robot_file_is_a_robot_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
         let all = seeds("robot_file");
         checks::robot_file(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+
+    #[test]
+    fn an_edited_targets_table_is_targets_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("targets_csv");
+        checks::targets_csv(&apply(all[seed.index(all.len())].clone(), &e));
     }
 
     #[test]

@@ -59,6 +59,21 @@ pub fn env_keywords(bytes: &[u8]) {
     }
 }
 
+/// A joint-targets table (`snake-cli run --targets FILE.csv`) for a robot of three movable joints
+/// `j0, j1, j2`: rows of finite targets, or a one-line error.
+pub fn targets_csv(bytes: &[u8]) {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return;
+    };
+    match crate::targets::TargetTable::parse(text, "fuzzed.csv", &["j0", "j1", "j2"]) {
+        Ok(table) => assert!(table
+            .rows
+            .iter()
+            .all(|r| r.len() == 3 && r.iter().all(|v| v.is_finite()))),
+        Err(e) => one_line(&format!("{e:#}")),
+    }
+}
+
 /// A robot that parsed and passed its checks is built in Bullet and stepped: a file that makes the
 /// engine abort, or turn the state non-finite silently, is the worst a crafted robot could do.
 fn build_and_step(spec: &RobotSpec) {
