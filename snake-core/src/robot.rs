@@ -480,16 +480,7 @@ impl Simulation for Robot {
     fn step(&mut self) -> Result<()> {
         self.world.step()?;
         self.steps += 1;
-        let base = self.world.base_state(self.body)?;
-        let ok = base.pose.position.iter().all(|v| v.is_finite())
-            && base.pose.orientation.coords.iter().all(|v| v.is_finite());
-        if !ok {
-            return Err(Error::NonFinite(format!(
-                "base pose after step {} is {:?}",
-                self.steps, base.pose
-            )));
-        }
-        Ok(())
+        self.world.check_finite_base(self.body, self.steps)
     }
     fn body_poses(&self) -> Result<Vec<Pose>> {
         let mut poses = vec![self.base_state()?.pose];

@@ -3,7 +3,7 @@
 use nalgebra::Vector3;
 
 use crate::config::SnakeConfig;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::math::StartPose;
 use crate::world::{BaseState, BodyId, BoxChain, BoxLink, Dynamics, JointState, Pose, World};
 
@@ -125,16 +125,7 @@ impl Snake {
     pub fn step(&mut self) -> Result<()> {
         self.world.step()?;
         self.steps += 1;
-        let base = self.world.base_state(self.body)?;
-        let pose_ok = base.pose.position.iter().all(|v| v.is_finite())
-            && base.pose.orientation.coords.iter().all(|v| v.is_finite());
-        if !pose_ok {
-            return Err(Error::NonFinite(format!(
-                "base pose after step {} is {:?}",
-                self.steps, base.pose
-            )));
-        }
-        Ok(())
+        self.world.check_finite_base(self.body, self.steps)
     }
 
     /// Pose and velocity of the base (the head cube).

@@ -679,6 +679,22 @@ impl World {
         check(unsafe { bullet_sys::ss_world_step(self.ptr()) })
     }
 
+    /// The body's base pose is finite after physics step `step` (counted by the caller), or the
+    /// simulation blew up: [`Error::NonFinite`], and the world should be discarded.
+    pub fn check_finite_base(&self, body: BodyId, step: u64) -> Result<()> {
+        let base = self.base_state(body)?;
+        let finite = base.pose.position.iter().all(|v| v.is_finite())
+            && base.pose.orientation.coords.iter().all(|v| v.is_finite());
+        if finite {
+            Ok(())
+        } else {
+            Err(Error::NonFinite(format!(
+                "base pose after step {step} is {:?}",
+                base.pose
+            )))
+        }
+    }
+
     /// The base's pose and velocity.
     pub fn base_state(&self, body: BodyId) -> Result<BaseState> {
         self.joint_count(body)?;
