@@ -103,8 +103,8 @@ def profile_native(joints, envs, rollouts, threads):
 def bench(joints, envs, rollouts, threads, env_seconds):
     import torch
     from snakesim import _core
-    from snakesim.config import env_config
-    from snakesim.sb3 import SnakeVecEnv
+    from snakesim.envs.config import env_config
+    from snakesim.envs.sb3 import SnakeVecEnv
     from stable_baselines3.common.vec_env import SubprocVecEnv, VecMonitor
 
     torch.set_num_threads(1)

@@ -10,6 +10,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use snake_core::env::{EnvConfig, Info, ResetOptions, SnakeEnv};
 use snake_core::{StartPose, StepBuffers, VecSnakeEnv};
 
+mod evaluation;
 mod lock;
 mod native;
 
@@ -401,6 +402,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
     m.add_class::<VecEnv>()?;
     native::register(m)?;
+    evaluation::register(m)?;
     lock::register(m)?;
     Ok(())
 }

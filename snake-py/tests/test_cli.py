@@ -14,8 +14,12 @@ from pathlib import Path
 import pytest
 import yaml
 from PIL import Image
-from snakesim import cli, runconfig
-from snakesim.train import EVAL_FIELDS, Trainer, TrainingInterrupted
+from snakesim.cli import app as cli
+from snakesim.cli import train as cli_train
+from snakesim.runs import config as runconfig
+from snakesim.runs.results import TrainingInterrupted
+from snakesim.runs.rundir import EVAL_FIELDS
+from snakesim.runs.sb3_trainer import Trainer
 from stable_baselines3.common.callbacks import BaseCallback
 
 REPO = Path(__file__).resolve().parents[2]
@@ -88,7 +92,7 @@ def test_train_writes_the_run_directory(small_run, tiny_yaml):
 
 
 def test_train_large_network(tmp_path, tiny_yaml, capsys):
-    from snakesim.policies import parameter_count
+    from snakesim.runs.policies import parameter_count
     from stable_baselines3 import PPO
 
     run_dir = tmp_path / "large"
@@ -235,9 +239,9 @@ def test_replay_figure_and_gif(small_run, tmp_path, capsys):
 
 
 def test_mp4_needs_ffmpeg(small_run, tmp_path, capsys, monkeypatch):
-    import snakesim.replay
+    import snakesim.viewer.replay
 
-    monkeypatch.setattr(snakesim.replay.shutil, "which", lambda name: None)
+    monkeypatch.setattr(snakesim.viewer.replay.shutil, "which", lambda name: None)
     code, _, err = run_cli(capsys, "replay", small_run, "--seconds", 0.1, "--out", tmp_path / "m.mp4")
     assert code == 1 and "mp4 needs ffmpeg" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "m.mp4").exists()
@@ -361,7 +365,8 @@ def test_shipped_configs_parse_as_train_options(repo):
     # The shipped configs are accepted by the train command's parser as they are.
     for path in sorted((repo / "snake-py" / "configs").glob("*.yaml")):
         args = cli.build_parser().parse_args(["train", "--config", str(path)])
-        assert runconfig.resolve(cli._train_overrides(args)) == runconfig.resolve(runconfig.load_yaml(path))
+        overrides = cli_train._train_overrides(args)
+        assert runconfig.resolve(overrides) == runconfig.resolve(runconfig.load_yaml(path))
 
 
 def test_mp4_through_ffmpeg(small_run, tmp_path, capsys, monkeypatch):

@@ -5,7 +5,8 @@ installed, so a missing module is simulated; test_wheel.py runs the real base in
 from __future__ import annotations
 
 import pytest
-from snakesim import cli, extras
+from snakesim import extras
+from snakesim.cli import app as cli
 
 
 @pytest.fixture

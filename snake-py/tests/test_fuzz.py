@@ -12,7 +12,7 @@ import numpy as np
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from snakesim import SnakeEnv, agents
-from snakesim.config import ENV_KEYWORDS
+from snakesim.envs.config import ENV_KEYWORDS
 
 ROBOTS = Path(__file__).resolve().parents[2] / "robots"
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import snakesim
 from gymnasium.utils.env_checker import check_env
-from snakesim.env import SnakeEnv, SnakeGoalEnv, make_env
+from snakesim.envs.env import SnakeEnv, SnakeGoalEnv, make_env
 
 ROOT = Path(__file__).resolve().parents[2]
 MODELS = ROOT / "models"

@@ -16,8 +16,10 @@ import gymnasium
 import numpy as np
 import pytest
 import yaml
-from snakesim import ENV_ID, SnakeEnv, SnakeVecEnv, SnakeVectorEnv, cli, runconfig
-from snakesim.config import LIMITS
+from snakesim import ENV_ID, SnakeEnv, SnakeVecEnv, SnakeVectorEnv
+from snakesim.cli import app as cli
+from snakesim.limits import LIMITS
+from snakesim.runs import config as runconfig
 
 # Each scenario runs in its own interpreter with a time limit: a deadlock fails the test, not CI.
 _THREADS = textwrap.dedent(
@@ -329,7 +331,7 @@ def test_bad_arguments_are_one_line(argv, code, message, sb3_run, tmp_path, caps
 
 
 def test_a_full_disk_is_one_line_and_keeps_the_old_file(sb3_run, tmp_path, capsys, monkeypatch):
-    import snakesim.plots
+    import snakesim.viewer.plots
 
     out = tmp_path / "fig.png"
     out.write_bytes(b"precious")
@@ -339,7 +341,7 @@ def test_a_full_disk_is_one_line_and_keeps_the_old_file(sb3_run, tmp_path, capsy
             f.write(b"half a figure")
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
 
-    monkeypatch.setattr(snakesim.plots, "plot_runs", full_disk)
+    monkeypatch.setattr(snakesim.viewer.plots, "plot_runs", full_disk)
     line = _one_line_error(capsys, ["plot", sb3_run, "--out", out])
     assert "No space left on device" in line
     assert out.read_bytes() == b"precious"
@@ -347,11 +349,11 @@ def test_a_full_disk_is_one_line_and_keeps_the_old_file(sb3_run, tmp_path, capsy
 
 
 def test_an_unexpected_error_is_one_line_too(sb3_run, tmp_path, capsys, monkeypatch):
-    import snakesim.plots
+    import snakesim.viewer.plots
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("a bug")
 
-    monkeypatch.setattr(snakesim.plots, "plot_runs", broken)
+    monkeypatch.setattr(snakesim.viewer.plots, "plot_runs", broken)
     line = _one_line_error(capsys, ["plot", sb3_run, "--out", tmp_path / "f.png"])
     assert "ZeroDivisionError: a bug" in line and "SNAKESIM_TRACEBACK" in line

@@ -12,8 +12,11 @@ import time
 import numpy as np
 import pytest
 import yaml
-from snakesim import agents, cli, runconfig
-from snakesim.train import EVAL_FIELDS
+from snakesim import agents
+from snakesim.cli import app as cli
+from snakesim.runs import config as runconfig
+from snakesim.runs import rundir
+from snakesim.runs.rundir import EVAL_FIELDS
 
 # Rollouts of 4 envs x 128 steps, episodes of at most 200 steps, 2 evaluation episodes: about a second.
 TINY = {
@@ -183,8 +186,8 @@ def test_export_to_sb3_acts_as_the_native_policy(native_run, tmp_path, capsys):
 
 
 def test_export_carries_the_observation_statistics(normalized_run, tmp_path, capsys):
-    from snakesim.export import vecnormalize_path
-    from snakesim.sb3 import SnakeVecEnv
+    from snakesim.envs.sb3 import SnakeVecEnv
+    from snakesim.runs.export import vecnormalize_path
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
@@ -229,7 +232,7 @@ def test_ctrl_c_saves_and_resume_continues(tmp_path):
     assert process.returncode == 130, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "interrupted at" in lines[0] and "--resume" in lines[0], err
-    found = agents.checkpoints(run_dir, native=True)
+    found = rundir.checkpoints(run_dir, native=True)
     assert found, "a checkpoint was saved"
     steps = found[-1][0]
     resumed = subprocess.run(

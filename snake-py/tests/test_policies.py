@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import torch
 from snakesim import SnakeVecEnv
-from snakesim.agents import inspect_model, load_agent
-from snakesim.policies import (
+from snakesim.agents.loading import inspect_model, load_agent
+from snakesim.runs.policies import (
     convert_legacy_state_dict,
     parameter_count,
     parse_legacy_net_arch,

@@ -19,10 +19,12 @@ import gymnasium
 import numpy as np
 import pytest
 import rerun as rr
-from snakesim import SnakeGoalEnv, cli, replay
-from snakesim.agents import load_agent
-from snakesim.rerun_log import MAX_SECONDS, RecordingError, read_trace
-from snakesim.wrappers import RerunLogger
+from snakesim import SnakeGoalEnv
+from snakesim.agents.loading import load_agent
+from snakesim.cli import app as cli
+from snakesim.envs.wrappers import RerunLogger
+from snakesim.viewer import replay
+from snakesim.viewer.recording import MAX_SECONDS, RecordingError, read_trace
 
 REPO = Path(__file__).resolve().parents[2]
 DT = 1 / 240
@@ -40,7 +42,7 @@ def snake_cli() -> Path:
 def _env() -> dict[str, str]:
     """The environment of a child process: this package first on the path (a checkout's own)."""
     env = dict(os.environ)
-    package = str(Path(cli.__file__).resolve().parents[1])
+    package = str(Path(cli.__file__).resolve().parents[2])
     env["PYTHONPATH"] = os.pathsep.join(p for p in (package, env.get("PYTHONPATH")) if p)
     env["SNAKESIM_PYTHON"] = sys.executable
     return env
@@ -231,7 +233,7 @@ def test_the_wrapper_changes_nothing_and_stops_at_its_limit(tmp_path):
 
 
 def test_long_head_paths_are_logged_in_pieces(tmp_path):
-    from snakesim.rerun_log import PATH_PIECE, SnakeLog, Trace
+    from snakesim.viewer.recording import PATH_PIECE, SnakeLog, Trace
 
     recording = rr.RecordingStream("snakesim-test")
     recording.save(tmp_path / "path.rrd")

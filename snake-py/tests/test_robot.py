@@ -47,7 +47,7 @@ def test_a_missing_robot_is_one_clear_error():
 
 def test_a_recorded_robot_episode_draws_its_links(tmp_path):
     rr = pytest.importorskip("rerun")
-    from snakesim.wrappers import RerunLogger
+    from snakesim.envs.wrappers import RerunLogger
 
     recording = rr.RecordingStream("snakesim-test")
     recording.save(tmp_path / "robot.rrd")

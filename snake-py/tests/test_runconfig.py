@@ -3,7 +3,9 @@
 import pathlib
 
 import pytest
-from snakesim import cli, runconfig
+from snakesim.cli import app as cli
+from snakesim.cli import train as cli_train
+from snakesim.runs import config as runconfig
 
 CONFIGS = sorted((pathlib.Path(__file__).resolve().parents[1] / "configs").glob("*.yaml"))
 
@@ -84,7 +86,7 @@ def test_precedence_defaults_yaml_then_flags(tmp_path):
             "env.goal=[1, 2]",
         ]
     )
-    config = runconfig.resolve(cli._train_overrides(args))
+    config = runconfig.resolve(cli_train._train_overrides(args))
     assert config["joints"] == 4, "a flag beats the YAML"
     assert config["n_envs"] == 3, "the YAML beats the default"
     assert config["seed"] == 42, "the default where nothing is said"

@@ -18,10 +18,9 @@ from pathlib import Path
 import pytest
 import yaml
 from PIL import Image
-from snakesim import cli
-from snakesim.sweep import CONNECT_TIMEOUT_S
-from snakesim.sweep_summary import SUCCESS_THRESHOLD
-from snakesim.tune_runner import KILL_ENV
+from snakesim.cli import app as cli
+from snakesim.sweeps.plan import CONNECT_TIMEOUT_S
+from snakesim.sweeps.summary import SUCCESS_THRESHOLD
 
 # Rollouts of 2 envs x 256 steps; an evaluation (2 episodes of at most 100 steps) and a checkpoint
 # every 1024 timesteps.
@@ -42,6 +41,26 @@ NEAR = {**TINY, "timesteps": 2048, "env": {**TINY["env"], "goal_radius": 11.0}}
 # The Stable-Baselines3 trainer (one torch thread), half the timesteps too: SB3 steps are slower.
 FAR_SB3 = {**TINY, "timesteps": 2048, "trainer": "sb3", "device": "cpu"}
 FAULT_TRIAL = "fault_seed42"
+# The fault, injected into the cluster's Python processes only (a sitecustomize on their PYTHONPATH), so
+# that no test hook ships: the trial FAULT_TRIAL kills its own worker (SIGKILL) once, right after it
+# reported its first checkpoint to Tune, the moment a real crash costs the least and tests the most.
+FAULT_HOOK = f"""
+import os, signal
+try:
+    from snakesim.sweeps import tune_runner
+except ImportError:
+    tune_runner = None
+if tune_runner is not None:
+    report = tune_runner._Reporter.__call__
+
+    def __call__(self, row):
+        first = self.reported_checkpoint == 0
+        report(self, row)
+        if first and self.reported_checkpoint and self.started_from == 0 and self.name == {FAULT_TRIAL!r}:
+            os.kill(os.getpid(), signal.SIGKILL)
+
+    tune_runner._Reporter.__call__ = __call__
+"""
 RAY = Path(sys.executable).with_name("ray")
 
 
@@ -79,7 +98,11 @@ def cluster():
     the trial FAULT_TRIAL once); stopped, with all its processes, when the tests end."""
     port = free_port()
     temp = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # short: Ray's socket paths have a length limit
-    env = {**os.environ, KILL_ENV: FAULT_TRIAL, "RAY_USAGE_STATS_ENABLED": "0"}
+    hooks = Path(temp) / "hooks"
+    hooks.mkdir()
+    (hooks / "sitecustomize.py").write_text(FAULT_HOOK)
+    path = os.pathsep.join(p for p in (str(hooks), os.environ.get("PYTHONPATH")) if p)
+    env = {**os.environ, "PYTHONPATH": path, "RAY_USAGE_STATS_ENABLED": "0"}
     # fmt: off
     head = subprocess.Popen(
         [
@@ -330,11 +353,11 @@ def test_an_unreachable_address_is_one_line_within_the_timeout(tmp_path):
         silent.bind(("127.0.0.1", 0))
         silent.listen()
         address = f"127.0.0.1:{silent.getsockname()[1]}"
-        code = f"from snakesim import tune_runner\ntune_runner.connect({address!r}, timeout=3)"
+        code = f"from snakesim.sweeps import tune_runner\ntune_runner.connect({address!r}, timeout=3)"
         started = time.monotonic()
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
         assert time.monotonic() - started < 15
     assert done.returncode == 1
     assert done.stderr.strip().splitlines()[-1] == (
-        f"snakesim.sweep.SweepError: no Ray cluster answered at {address} within 3 s"
+        f"snakesim.sweeps.plan.SweepError: no Ray cluster answered at {address} within 3 s"
     )

@@ -19,9 +19,13 @@ import pytest
 import yaml
 from safetensors import safe_open
 from safetensors.numpy import load_file, save_file
-from snakesim import _core, agents, cli, sweep
-from snakesim.native import NativeTrainer
-from snakesim.train import RunDirError, Trainer
+from snakesim import _core, agents
+from snakesim.cli import app as cli
+from snakesim.runs import rundir
+from snakesim.runs.native import NativeTrainer
+from snakesim.runs.rundir import RunDirError
+from snakesim.runs.sb3_trainer import Trainer
+from snakesim.sweeps import plan as sweep
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -88,7 +92,7 @@ def test_a_second_writer_is_refused_at_once_and_the_first_run_stays_its_own(snak
         stderr=subprocess.PIPE,
         text=True,
     )
-    wait_for(lambda: len(agents.checkpoints(run_dir, native=True)) >= 2)
+    wait_for(lambda: len(rundir.checkpoints(run_dir, native=True)) >= 2)
     seconds = []
     for argv in (
         [snake_cli, "train", "--run-dir", run_dir, "--resume", "--timesteps", "200000", "--no-progress"],
@@ -121,7 +125,7 @@ def test_a_second_writer_is_refused_at_once_and_the_first_run_stays_its_own(snak
     steps = evaluation_steps(run_dir)
     assert steps == sorted(set(steps)), "no evaluation twice"
     assert steps[-1] == 60 * 1024
-    checkpoints = agents.checkpoints(run_dir, native=True)
+    checkpoints = rundir.checkpoints(run_dir, native=True)
     assert [s for s, _ in checkpoints] == [1024 * k for k in range(1, 61)], "only the first run's"
     for steps_, path in checkpoints:
         assert json.loads(path.with_suffix(".json").read_text())["timesteps"] == steps_
@@ -135,10 +139,10 @@ def test_a_killed_writer_leaves_a_run_that_resumes_at_once(snake_cli, tmp_path):
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
-    wait_for(lambda: len(agents.checkpoints(run_dir, native=True)) >= 3)
+    wait_for(lambda: len(rundir.checkpoints(run_dir, native=True)) >= 3)
     first.send_signal(signal.SIGKILL)
     first.wait(timeout=30)
-    last = agents.checkpoints(run_dir, native=True)[-1][0]
+    last = rundir.checkpoints(run_dir, native=True)[-1][0]
     resumed = subprocess.run(
         [
             snake_cli,
@@ -187,13 +191,16 @@ def test_a_new_run_may_use_a_folder_holding_only_a_lock_file(tmp_path):
 
 
 def test_a_sweep_folder_has_one_writer(tmp_path):
+    pytest.importorskip("ray")
+    from snakesim.sweeps import sweep as sweep_runner
+
     out = tmp_path / "sweep"
     trials = sweep.plan({"tiny": dict(TINY)}, {}, 1, 1)
     manifest = sweep.new_manifest("sweep", trials, configs=["tiny.yaml"], grid={}, seeds=1, set=[])
     manifest.update(cpus_per_trial=1, max_failures=0)
     with sweep.start_folder(out, manifest):
         with pytest.raises(sweep.SweepError, match=f"folder {out} is being written by another process"):
-            sweep.resume_sweep(out)
+            sweep_runner.resume_sweep(out)
         start = time.monotonic()
         with pytest.raises(sweep.SweepError, match=r"\(waited 0\.5 s\)"):
             sweep.lock_folder(out, 0.5)
@@ -233,7 +240,7 @@ def test_a_corrupt_checkpoint_is_skipped_and_named_on_resume(native_run, tmp_pat
 
 def test_no_loadable_checkpoint_is_one_line(native_run, tmp_path, capsys):
     run_dir = _copy(native_run, tmp_path)
-    for _, path in agents.checkpoints(run_dir, native=True):
+    for _, path in rundir.checkpoints(run_dir, native=True):
         path.write_bytes(b"garbage")
     code = cli.main(["train", "--run-dir", str(run_dir), "--resume", "--timesteps", "8192", "--no-progress"])
     err = capsys.readouterr().err
@@ -289,7 +296,7 @@ def test_impossible_model_metadata_is_refused_naming_the_key(
 
 def test_impossible_checkpoint_metadata_is_refused_on_resume(native_run, tmp_path, capsys):
     run_dir = _copy(native_run, tmp_path)
-    for steps, path in agents.checkpoints(run_dir, native=True):
+    for steps, path in rundir.checkpoints(run_dir, native=True):
         _rewrite(path, path, {"wall_time": "-1" if steps % 2048 else "nan", "normalize.gamma": "2"})
     code = cli.main(["train", "--run-dir", str(run_dir), "--resume", "--timesteps", "8192", "--no-progress"])
     err = capsys.readouterr().err
@@ -337,12 +344,12 @@ def test_ctrl_c_in_snake_cli_says_what_was_saved_not_an_error(snake_cli, tmp_pat
         text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
-    wait_for(lambda: len(agents.checkpoints(run_dir, native=True)) >= 1)
+    wait_for(lambda: len(rundir.checkpoints(run_dir, native=True)) >= 1)
     process.send_signal(signal.SIGINT)
     _, err = process.communicate(timeout=60)
     assert process.returncode == 130, err
     assert "error" not in err
-    steps = agents.checkpoints(run_dir, native=True)[-1][0]
+    steps = rundir.checkpoints(run_dir, native=True)[-1][0]
     assert err.strip() == (
         f"interrupted at {steps} timesteps; saved {run_dir}/checkpoints/model_{steps}_steps.safetensors and "
         f"{run_dir}/model.safetensors; continue with: snake-cli train --run-dir {run_dir} --resume"

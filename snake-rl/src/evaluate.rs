@@ -1,4 +1,6 @@
-//! Evaluation episodes: the protocol of `snakesim evaluate` and of SB3's `evaluate_policy`.
+//! Evaluation episodes: the protocol of `snakesim evaluate` and of SB3's `evaluate_policy`, the one
+//! implementation behind the native trainer's evaluations, `snakesim evaluate`, the SB3 trainer's
+//! evaluations and the sweeps (Python calls [`run_episodes_with`] and [`summarize`] through `_core`).
 //!
 //! Up to 16 envs run at once, env `i` seeded with `seed + i` (its later episodes continue its random
 //! stream), and env `i` contributes `(episodes + i) / m` episodes, so a seed fixes the episodes'
@@ -28,10 +30,16 @@ pub struct Episode {
     pub seconds: f64,
     /// Head displacement from the start to the end, metres.
     pub distance: f64,
+    /// Length of the head's path in the plane, metres.
+    pub path_length: f64,
+    /// Mechanical work of the motors, joules.
+    pub work: f64,
+    /// The snake's weight m g, newtons.
+    pub weight: f64,
 }
 
 impl Episode {
-    /// Mean speed, m/s.
+    /// Mean speed, m/s: straight-line displacement over the episode's time.
     pub fn speed(&self) -> f64 {
         if self.seconds > 0.0 {
             self.distance / self.seconds
@@ -39,6 +47,26 @@ impl Episode {
             0.0
         }
     }
+
+    /// Straight-line displacement / path length (1: a straight line); None without a path.
+    pub fn path_efficiency(&self) -> Option<f64> {
+        (self.path_length > 0.0).then(|| self.distance / self.path_length)
+    }
+
+    /// Mechanical energy / (m g displacement), dimensionless; None without displacement.
+    pub fn cost_of_transport(&self) -> Option<f64> {
+        (self.distance > 0.0 && self.weight > 0.0)
+            .then(|| self.work / (self.weight * self.distance))
+    }
+}
+
+/// The Wilson score interval of `successes` out of `n` at `z` standard deviations (1.959964: 95 %).
+pub fn wilson_interval(successes: usize, n: usize, z: f64) -> (f64, f64) {
+    let (k, n) = (successes as f64, n as f64);
+    let p = k / n;
+    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
+    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+    ((centre - half).max(0.0), (centre + half).min(1.0))
 }
 
 /// The summary of an evaluation.
@@ -48,6 +76,8 @@ pub struct Summary {
     pub episodes: usize,
     /// Fraction that reached the goal.
     pub success_rate: f64,
+    /// The success rate's 95 % Wilson interval.
+    pub success_rate_ci95: (f64, f64),
     /// Mean return.
     pub mean_return: f64,
     /// Population standard deviation of the returns.
@@ -58,6 +88,10 @@ pub struct Summary {
     pub mean_seconds_to_goal: Option<f64>,
     /// Mean speed over all episodes, m/s.
     pub mean_speed: f64,
+    /// Mean path efficiency of the episodes that have one.
+    pub mean_path_efficiency: Option<f64>,
+    /// Mean cost of transport of the episodes that have one.
+    pub mean_cost_of_transport: Option<f64>,
     /// Mean episode length, steps.
     pub mean_length: f64,
 }
@@ -77,14 +111,30 @@ pub fn summarize(episodes: &[Episode]) -> Summary {
         .sum::<f64>()
         / n)
         .sqrt();
+    let present = |values: Vec<f64>| {
+        (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+    };
     Summary {
         episodes: episodes.len(),
         success_rate: wins.len() as f64 / n,
+        success_rate_ci95: wilson_interval(wins.len(), episodes.len(), 1.959964),
         mean_return,
         std_return,
         mean_steps_to_goal: (!wins.is_empty()).then(|| mean(&|e| e.steps as f64, &wins)),
         mean_seconds_to_goal: (!wins.is_empty()).then(|| mean(&|e| e.seconds, &wins)),
         mean_speed: mean(&|e| e.speed(), &all),
+        mean_path_efficiency: present(
+            episodes
+                .iter()
+                .filter_map(Episode::path_efficiency)
+                .collect(),
+        ),
+        mean_cost_of_transport: present(
+            episodes
+                .iter()
+                .filter_map(Episode::cost_of_transport)
+                .collect(),
+        ),
         mean_length: mean(&|e| e.steps as f64, &all),
     }
 }
@@ -98,16 +148,44 @@ pub enum EvalError {
     /// `stop()` asked to stop.
     #[error("evaluation interrupted")]
     Interrupted,
+    /// The actor failed (e.g. a Python policy raised); the message says why.
+    #[error("{0}")]
+    Actor(String),
 }
 
+/// What acts in an evaluation: given the observations of `m` envs (row-major, `m x obs_dim`), writes
+/// their actions (`m x action_dim`; `A` is f32 for the native policy, f64 for Python's actors, whose
+/// actions the env takes as they are).
+pub type Actor<'a, A> = dyn FnMut(&[f32], usize, &mut [A]) -> Result<(), EvalError> + 'a;
+
 /// Runs `episodes` episodes of `policy` (deterministic or sampled) in `config`'s env, stepping the
-/// envs on `pool` (one after the other without one); `stop` is asked between steps.
+/// envs on `pool` (one after the other without one); `stop` is asked between steps. A sampling policy
+/// draws from a generator seeded with `seed`.
 pub fn run_episodes(
     policy: &mut Policy,
     config: &EnvConfig,
     episodes: usize,
     seed: u64,
     deterministic: bool,
+    pool: Option<&Arc<rayon::ThreadPool>>,
+    stop: &mut dyn FnMut() -> bool,
+) -> Result<Vec<Episode>, EvalError> {
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
+    let mut act = |obs: &[f32], m: usize, actions: &mut [f32]| {
+        policy.act(obs, m, deterministic, &mut rng, actions);
+        Ok(())
+    };
+    run_episodes_with(&mut act, config, episodes, seed, pool, stop)
+}
+
+/// The evaluation protocol for any actor: up to [`MAX_EVAL_ENVS`] envs, env `i` seeded with
+/// `seed + i`, env `i` contributing `(episodes + i) / m` episodes, each measured as [`Episode`]
+/// says. `episodes` must be at least 1.
+pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
+    act: &mut Actor<'_, A>,
+    config: &EnvConfig,
+    episodes: usize,
+    seed: u64,
     pool: Option<&Arc<rayon::ThreadPool>>,
     stop: &mut dyn FnMut() -> bool,
 ) -> Result<Vec<Episode>, EvalError> {
@@ -124,14 +202,15 @@ pub fn run_episodes(
     let mut out = StepBuffers::for_envs(&envs);
     envs.reset(Some(seed), &mut out.obs)?;
     let step_seconds = config.snake.dt * f64::from(config.physics_steps_per_env_step);
-    let mut actions = vec![0.0f32; m * n];
-    let mut rng = ChaCha12Rng::seed_from_u64(seed);
+    let mut actions = vec![A::default(); m * n];
+    let snake = &config.snake;
+    let weight = (snake.base_mass + snake.joints as f64 * snake.link_mass) * snake.gravity.abs();
     let mut done = Vec::with_capacity(episodes);
     while counts != targets {
         if stop() {
             return Err(EvalError::Interrupted);
         }
-        policy.act(&out.obs, m, deterministic, &mut rng, &mut actions);
+        act(&out.obs, m, &mut actions)?;
         let finals = envs.step_into(&actions, &mut out)?;
         for f in finals.iter() {
             if counts[f.env] >= targets[f.env] {
@@ -149,6 +228,9 @@ pub fn run_episodes(
                 success: info.success,
                 seconds: info.episode_step as f64 * step_seconds,
                 distance: snake_core::env::python_hypot(dx, dy),
+                path_length: info.path_length,
+                work: info.work,
+                weight,
             });
             counts[f.env] += 1;
         }

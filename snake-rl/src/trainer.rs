@@ -536,6 +536,8 @@ impl Run {
             Ok(e) => e,
             Err(EvalError::Interrupted) => return Ok(false),
             Err(EvalError::Env(e)) => return Err(TrainError::Env(e)),
+            // The native policy's actor cannot fail; kept total rather than a panic.
+            Err(EvalError::Actor(message)) => return Err(TrainError::Setup(message)),
         };
         let s = summarize(&episodes);
         let row = EvaluationRow {

@@ -43,7 +43,7 @@ class _Dummy:
 
 
 def make_ppo(case):
-    from snakesim.policies import policy_kwargs
+    from snakesim.runs.policies import policy_kwargs
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import DummyVecEnv
 

@@ -14,8 +14,11 @@
   subprocesses), and :class:`SnakeVectorEnv`, the same for Gymnasium's vector API.
 
 - :class:`snakesim.wrappers.RerunLogger`, a wrapper that logs episodes to Rerun as they run (the cubes
-  in 3D at every physics step, the joints, the reward); :mod:`snakesim.rerun_log` says what a
-  recording holds.
+  in 3D at every physics step, the joints, the reward); :mod:`snakesim.viewer.recording` says
+  what a recording holds.
+
+The package by concern: :mod:`snakesim.envs`, :mod:`snakesim.runs`, :mod:`snakesim.agents`,
+:mod:`snakesim.sweeps`, :mod:`snakesim.viewer`, :mod:`snakesim.cli`.
 """
 
 from __future__ import annotations
@@ -24,9 +27,9 @@ import gymnasium
 
 from snakesim import extras
 from snakesim._core import __version__
-from snakesim.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS
-from snakesim.env import SnakeEnv, SnakeGoalEnv
-from snakesim.vector import SnakeVectorEnv
+from snakesim.envs.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS
+from snakesim.envs.env import SnakeEnv, SnakeGoalEnv
+from snakesim.envs.vector import SnakeVectorEnv
 
 __all__ = ["SnakeEnv", "SnakeGoalEnv", "SnakeVectorEnv", "__version__", "register_envs"]
 if extras.available("sb3"):  # without the extra, `from snakesim import *` leaves it out
@@ -42,8 +45,8 @@ def register_envs() -> None:
     # or of T with gymnasium.make(..., max_episode_steps=T). That wrapper alone truncates: the env is
     # made with max_episode_steps=None (no limit of its own), so that T may also exceed the default.
     for env_id, entry_point, defaults in (
-        (ENV_ID, "snakesim.env:SnakeEnv", ENV_DEFAULTS),
-        (GOAL_ENV_ID, "snakesim.env:SnakeGoalEnv", GOAL_ENV_DEFAULTS),
+        (ENV_ID, "snakesim.envs.env:SnakeEnv", ENV_DEFAULTS),
+        (GOAL_ENV_ID, "snakesim.envs.env:SnakeGoalEnv", GOAL_ENV_DEFAULTS),
     ):
         if env_id not in gymnasium.registry:
             gymnasium.register(
@@ -58,7 +61,7 @@ def __getattr__(name: str):
     # SnakeVecEnv needs stable-baselines3 (the extra snakesim[sb3]): import it only when asked for; without
     # it, asking is an ImportError naming the pip install (snakesim.extras).
     if name == "SnakeVecEnv":
-        from snakesim.sb3 import SnakeVecEnv
+        from snakesim.envs.sb3 import SnakeVecEnv
 
         return SnakeVecEnv
     raise AttributeError(f"module 'snakesim' has no attribute {name!r}")

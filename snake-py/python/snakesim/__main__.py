@@ -2,6 +2,6 @@
 
 import sys
 
-from snakesim.cli import main
+from snakesim.cli.app import main
 
 sys.exit(main())

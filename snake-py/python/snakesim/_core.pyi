@@ -1,4 +1,7 @@
 # Type stub of the compiled module snakesim._core (snake-py/src/lib.rs); tests/test_stub.py keeps it in sync.
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 
@@ -116,3 +119,13 @@ class NativePolicy:
     def obs_rms(
         self,
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], float] | None: ...
+
+MAX_EVAL_ENVS: int
+
+def run_episodes(
+    config_json: str,
+    episodes: int,
+    seed: int,
+    act: Callable[[npt.NDArray[np.float32]], npt.NDArray[np.float32] | npt.NDArray[np.float64]],
+) -> list[dict[str, Any]]: ...
+def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]: ...

@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from snakesim import _core, extras
-from snakesim.config import ENV_DEFAULTS, action_array, env_config
+from snakesim.envs.config import ENV_DEFAULTS, action_array, env_config
 
 extras.require("sb3", "snakesim.SnakeVecEnv (Stable-Baselines3's VecEnv)")
 

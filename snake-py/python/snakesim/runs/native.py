@@ -1,7 +1,7 @@
 """The native trainer (snake-rl, Rust) from Python: ``snakesim train`` with ``trainer: native``.
 
 The whole training loop runs in Rust; Python only shows progress and turns Ctrl-C into a saved
-checkpoint. The run directory has the layout of every snakesim run (see :mod:`snakesim.train`), with
+checkpoint. The run directory has the layout of every snakesim run (see :mod:`snakesim.runs.rundir`), with
 ``model.safetensors`` and ``checkpoints/model_<T>_steps.safetensors`` for the policy.
 """
 
@@ -15,15 +15,10 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from snakesim import _core, runconfig
-from snakesim.train import (
-    RunDirError,
-    TrainingFailed,
-    TrainingInterrupted,
-    TrainResult,
-    default_run_dir,
-    lock_run_dir,
-)
+from snakesim import _core
+from snakesim.runs import config as runconfig
+from snakesim.runs.results import TrainingFailed, TrainingInterrupted, TrainResult
+from snakesim.runs.rundir import RunDirError, default_run_dir, lock_run_dir
 
 
 class _Progress:

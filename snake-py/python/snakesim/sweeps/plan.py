@@ -8,11 +8,12 @@ A sweep lives in one folder (``--out``)::
                         sessions.jsonl: one line per training session of the trial (a retried or
                         resumed trial has several)
     tune/session-N/     Ray Tune's records of the N-th ``snakesim sweep`` session (results, errors)
-    summary.csv         one row per config and grid point (see :mod:`snakesim.sweep_summary`)
+    summary.csv         one row per config and grid point (see :mod:`snakesim.sweeps.summary`)
 
 A trial's seeds are its config's ``seed`` and the next ``K - 1``; ``--set`` applies to every config
-and the grid's values replace theirs. Everything is checked before Ray is started. The Ray side (the
-trainable, progress, connecting) is :mod:`snakesim.tune_runner`; searches are :mod:`snakesim.search`.
+and the grid's values replace theirs. Everything is checked before Ray is started. Running the trials
+is :mod:`snakesim.sweeps.sweep`; the Ray side (the trainable, progress, connecting) is
+:mod:`snakesim.sweeps.tune_runner`; searches are :mod:`snakesim.sweeps.search`.
 """
 
 from __future__ import annotations
@@ -22,14 +23,15 @@ import datetime
 import json
 import os
 import re
-import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim import _core, runconfig
-from snakesim.config import LIMITS
+from snakesim import _core
 from snakesim.files import write_atomically
+from snakesim.limits import LIMITS
+from snakesim.runs import config as runconfig
+from snakesim.runs import rundir
 
 MANIFEST_FILE = "sweep.json"
 MANIFEST_FORMAT = "snakesim-sweep"
@@ -62,7 +64,7 @@ class SweepError(ValueError):
 @dataclasses.dataclass(frozen=True)
 class Trial:
     """One training run of a sweep: its folder name, config, grid point and seed, and the layered
-    configuration overrides that make it (resolved by :func:`snakesim.runconfig.resolve`)."""
+    configuration overrides that make it (resolved by :func:`snakesim.runs.config.resolve`)."""
 
     name: str
     config: str
@@ -298,16 +300,14 @@ def is_sweep(folder: str | os.PathLike) -> bool:
 
 def trial_finished(run_dir: Path) -> bool:
     """Whether a trial's run has trained all its timesteps (its latest checkpoint is at or past them)."""
-    from snakesim import agents
-
-    config_path = run_dir / agents.CONFIG_FILE
+    config_path = run_dir / rundir.CONFIG_FILE
     if not config_path.is_file():
         return False
     try:
         config = runconfig.load(config_path)
     except runconfig.ConfigError:
         return False
-    found = agents.checkpoints(run_dir, native=config["trainer"] == "native")
+    found = rundir.checkpoints(run_dir, native=config["trainer"] == "native")
     return bool(found) and found[-1][0] >= config["timesteps"]
 
 
@@ -321,146 +321,8 @@ def next_session(out: Path) -> str:
     return f"session-{number}"
 
 
-# -- the command ----------------------------------------------------------------------------------
-def command(args: Any) -> int:
-    """``snakesim sweep`` from its parsed arguments (see snakesim.cli)."""
-    cluster = {"address": args.address, "progress": args.progress}
-    if args.resume is not None:
-        if args.configs or args.out or args.seeds is not None or args.grid or args.set:
-            raise SweepError(
-                "--resume continues a sweep as planned: give no configs, --out, --seeds, --grid or --set"
-            )
-        return resume_sweep(
-            args.resume, cpus_per_trial=args.cpus_per_trial, max_failures=args.max_failures, **cluster
-        )
-    if not args.configs or args.out is None:
-        raise SweepError("a new sweep needs CONFIG.yaml ... and --out (or --resume SWEEP to continue one)")
-    return run_sweep(
-        args.configs,
-        out=args.out,
-        seeds=1 if args.seeds is None else args.seeds,
-        grid=args.grid,
-        sets=args.set,
-        cpus_per_trial=args.cpus_per_trial or DEFAULT_CPUS_PER_TRIAL,
-        max_failures=DEFAULT_MAX_FAILURES if args.max_failures is None else args.max_failures,
-        **cluster,
-    )
-
-
 def check_cluster_options(cpus_per_trial: int, max_failures: int) -> None:
     if not 1 <= cpus_per_trial <= LIMITS["threads"]:
         raise SweepError(f"--cpus-per-trial must be in [1, {LIMITS['threads']}], got {cpus_per_trial}")
     if not 0 <= max_failures <= MAX_FAILURES:
         raise SweepError(f"--max-failures must be in [0, {MAX_FAILURES}], got {max_failures}")
-
-
-def run_sweep(
-    configs: Sequence[str | os.PathLike],
-    *,
-    out: str | os.PathLike,
-    seeds: int,
-    grid: Sequence[str] = (),
-    sets: Sequence[str] = (),
-    address: str | None = None,
-    cpus_per_trial: int = DEFAULT_CPUS_PER_TRIAL,
-    max_failures: int = DEFAULT_MAX_FAILURES,
-    progress: bool | None = None,
-) -> int:
-    """``snakesim sweep``: plans the trials, writes the plan, runs them; returns the exit status."""
-    check_cluster_options(cpus_per_trial, max_failures)
-    out_path = check_new_out(out)
-    parsed_grid = parse_grid(grid)
-    trials = plan(load_configs(configs, sets), parsed_grid, seeds, cpus_per_trial)
-    manifest = new_manifest(
-        "sweep",
-        trials,
-        configs=[os.fspath(c) for c in configs],
-        grid=parsed_grid,
-        seeds=seeds,
-        set=list(sets),
-        cpus_per_trial=cpus_per_trial,
-        max_failures=max_failures,
-    )
-    from snakesim import tune_runner
-
-    # Before writing anything: an unreachable or too small cluster leaves no folder behind.
-    client = tune_runner.connect(address, cpus_per_trial)
-    with start_folder(out_path, manifest):
-        print(f"sweep {out_path}: {len(trials)} trials on {client}", flush=True)
-        return _run(out_path, trials, trials, cpus_per_trial, max_failures, progress)
-
-
-def resume_sweep(
-    folder: str | os.PathLike,
-    *,
-    address: str | None = None,
-    cpus_per_trial: int | None = None,
-    max_failures: int | None = None,
-    progress: bool | None = None,
-) -> int:
-    """``snakesim sweep --resume``: runs the trials of a sweep that have not finished."""
-    manifest = read_manifest(folder)
-    with lock_folder(Path(folder)):
-        return _resume(folder, manifest, address, cpus_per_trial, max_failures, progress)
-
-
-def _resume(
-    folder: str | os.PathLike,
-    manifest: Mapping[str, Any],
-    address: str | None,
-    cpus_per_trial: int | None,
-    max_failures: int | None,
-    progress: bool | None,
-) -> int:
-    if manifest["kind"] != "sweep":
-        raise SweepError(f"{folder} is a {manifest['kind']}, not a sweep; --resume continues sweeps only")
-    cpus = manifest["cpus_per_trial"] if cpus_per_trial is None else cpus_per_trial
-    failures = manifest["max_failures"] if max_failures is None else max_failures
-    check_cluster_options(cpus, failures)
-    out = Path(folder)
-    trials = manifest["trials"]
-    left = [t for t in trials if not trial_finished(t.run_dir(out))]
-    if not left:
-        print(f"sweep {out}: all {len(trials)} trials have finished")
-        return _run(out, trials, [], cpus, failures, progress)
-    from snakesim import tune_runner
-
-    client = tune_runner.connect(address, cpus)
-    print(
-        f"sweep {out}: {len(trials) - len(left)} of {len(trials)} trials finished; "
-        f"running the other {len(left)} on {client}",
-        flush=True,
-    )
-    return _run(out, trials, left, cpus, failures, progress)
-
-
-def _run(
-    out: Path,
-    trials: Sequence[Trial],
-    to_run: Sequence[Trial],
-    cpus_per_trial: int,
-    max_failures: int,
-    progress: bool | None,
-) -> int:
-    from snakesim import sweep_summary, tune_runner
-
-    outcome = (
-        tune_runner.run_trials(out, to_run, cpus_per_trial, max_failures, progress)
-        if to_run
-        else tune_runner.Outcome()
-    )
-    rows = sweep_summary.summarize(out, trials)
-    path = sweep_summary.write_csv(out, rows)
-    print(sweep_summary.format_table(rows))
-    print(f"wrote {path}; plot it with: snakesim plot {out} --out {out / 'curves.png'}")
-    unfinished = [t.name for t in trials if not trial_finished(t.run_dir(out))]
-    for name, error in outcome.errors.items():
-        print(f"snakesim sweep: trial {name} failed: {error}", file=sys.stderr)
-    if unfinished:
-        print(
-            f"snakesim sweep: {len(unfinished)} of {len(trials)} trials did not finish; "
-            f"continue with: snakesim sweep --resume {out}",
-            file=sys.stderr,
-        )
-        return 130 if outcome.interrupted else 1
-    return 0

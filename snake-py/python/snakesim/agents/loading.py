@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import os
 import pickle
-import re
 import zipfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -20,16 +18,18 @@ from typing import Any
 
 import numpy as np
 
-from snakesim import extras, runconfig
-from snakesim.config import ENV_DEFAULTS, LIMITS
-
-MODEL_FILE = "model.zip"
-NATIVE_MODEL_FILE = "model.safetensors"
-VECNORMALIZE_FILE = "vecnormalize.pkl"
-CONFIG_FILE = "config.yaml"
-CHECKPOINT_DIR = "checkpoints"
-_CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
-_NATIVE_CHECKPOINT = re.compile(r"^model_(\d+)_steps\.safetensors$")
+from snakesim import extras
+from snakesim.envs.config import ENV_DEFAULTS
+from snakesim.limits import LIMITS
+from snakesim.runs import config as runconfig
+from snakesim.runs.rundir import (
+    CONFIG_FILE,
+    MODEL_FILE,
+    NATIVE_MODEL_FILE,
+    VECNORMALIZE_FILE,
+    checkpoint_paths,
+    checkpoints,
+)
 
 
 class AgentError(ValueError):
@@ -58,7 +58,7 @@ class Agent:
     obs_normalizer: Any = None  # a VecNormalize whose statistics normalise observations, or None
     config: dict[str, Any] | None = None  # the run's config.yaml, when loaded from a run directory
     # "sb3" (policy: an SB3 ActorCriticPolicy), "native" (a _core.NativePolicy) or "baseline" (a
-    # snakesim.baselines.Controller)
+    # snakesim.agents.baselines.Controller)
     kind: str = "sb3"
 
     @property
@@ -75,21 +75,6 @@ class Agent:
             obs = self.obs_normalizer.normalize_obs(obs)
         actions, _ = self.policy.predict(obs, deterministic=deterministic)
         return actions
-
-
-def checkpoints(run_dir: str | os.PathLike, native: bool = False) -> list[tuple[int, Path]]:
-    """The run's checkpoints as (timesteps, path), oldest first: SB3's zips, or the native trainer's
-    safetensors files with ``native``."""
-    folder = Path(run_dir) / CHECKPOINT_DIR
-    if not folder.is_dir():
-        return []
-    pattern = _NATIVE_CHECKPOINT if native else _CHECKPOINT
-    found = []
-    for path in folder.iterdir():
-        match = pattern.match(path.name)
-        if match:
-            found.append((int(match.group(1)), path))
-    return sorted(found)
 
 
 def _head(path: str | os.PathLike, size: int) -> bytes:
@@ -138,11 +123,6 @@ def load_normalizer(path: str | os.PathLike):
         raise AgentError(f"{os.fspath(path)} is not a VecNormalize pickle (it holds {held})")
     normalizer.training = False
     return normalizer
-
-
-def checkpoint_paths(run_dir: str | os.PathLike, timesteps: int) -> tuple[Path, Path]:
-    folder = Path(run_dir) / CHECKPOINT_DIR
-    return folder / f"model_{timesteps}_steps.zip", folder / f"vecnormalize_{timesteps}_steps.pkl"
 
 
 def inspect_model(path: str | os.PathLike) -> ModelInfo:
@@ -201,7 +181,7 @@ def _load_legacy_policy(path: Path, info: ModelInfo, device: str):
     from stable_baselines3.common.policies import ActorCriticPolicy
     from stable_baselines3.common.save_util import load_from_zip_file
 
-    from snakesim.policies import convert_legacy_state_dict, parse_legacy_net_arch, policy_kwargs
+    from snakesim.runs.policies import convert_legacy_state_dict, parse_legacy_net_arch, policy_kwargs
 
     with zipfile.ZipFile(path) as archive:
         raw = json.loads(archive.read("data"))
@@ -316,7 +296,7 @@ def load_agent(
     if env_kwargs["joints"] is None:
         env_kwargs["joints"] = info.action_dim
     env_kwargs.update(env_overrides or {})
-    from snakesim.env import make_env
+    from snakesim.envs.env import make_env
 
     try:
         probe = make_env(**env_kwargs)
@@ -346,7 +326,7 @@ def load_agent(
     )
 
 
-#: ``baseline:NAME`` names a hand-made controller of the goal task (snakesim.baselines).
+#: ``baseline:NAME`` names a hand-made controller of the goal task (snakesim.agents.baselines).
 BASELINE_PREFIX = "baseline:"
 
 
@@ -355,9 +335,9 @@ def _load_baseline(
 ) -> Agent:
     """A baseline controller in the goal task (``snakesim/SnakeGoal-v0``) with ``joints`` (5) and
     ``preset`` (paper)."""
-    from snakesim import baselines
-    from snakesim.config import GOAL_ENV_DEFAULTS
-    from snakesim.env import make_env
+    from snakesim.agents import baselines
+    from snakesim.envs.config import GOAL_ENV_DEFAULTS
+    from snakesim.envs.env import make_env
 
     env_kwargs: dict[str, Any] = {
         "task": "goal",
@@ -391,7 +371,7 @@ def _load_native_agent(
 ) -> Agent:
     """A native run directory (model.safetensors, else its latest checkpoint) or model file."""
     from snakesim import _core
-    from snakesim.env import make_env
+    from snakesim.envs.env import make_env
 
     config = None
     if source.is_dir():
@@ -438,134 +418,3 @@ def _load_native_agent(
         config=config,
         kind="native",
     )
-
-
-@dataclasses.dataclass
-class Episode:
-    ret: float  # the return
-    steps: int  # env steps
-    success: bool  # reached the goal (terminated), not truncated
-    seconds: float  # simulated time of the episode
-    distance: float  # head displacement from the start to the end, metres
-    path_length: float = 0.0  # length of the head's path in the plane, metres
-    work: float = 0.0  # mechanical work of the motors, joules
-    weight: float = 0.0  # the snake's weight m g, newtons
-
-    @property
-    def speed(self) -> float:
-        """Mean speed, m/s: straight-line displacement over the episode's time."""
-        return self.distance / self.seconds if self.seconds > 0 else 0.0
-
-    @property
-    def path_efficiency(self) -> float | None:
-        """Straight-line displacement / path length (1: a straight line); None without a path."""
-        return self.distance / self.path_length if self.path_length > 0 else None
-
-    @property
-    def cost_of_transport(self) -> float | None:
-        """Mechanical energy / (m g displacement), dimensionless; None without displacement."""
-        return self.work / (self.weight * self.distance) if self.distance > 0 and self.weight > 0 else None
-
-
-def wilson_interval(successes: int, n: int, z: float = 1.959964) -> tuple[float, float]:
-    """The Wilson score interval of a success rate (95 % by default)."""
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return max(0.0, centre - half), min(1.0, centre + half)
-
-
-def _mean(values: list[float | None]) -> float | None:
-    present = [v for v in values if v is not None]
-    return float(np.mean(present)) if present else None
-
-
-def run_episodes(
-    act: Any,
-    env_kwargs: Mapping[str, Any],
-    episodes: int,
-    seed: int,
-    max_envs: int = 16,
-) -> list[Episode]:
-    """Runs ``episodes`` episodes of ``act(obs_batch) -> actions`` in a batched env of its own.
-
-    Up to ``max_envs`` episodes run at once, env i seeded with ``seed + i`` (its later episodes
-    continue its stream), so a seed gives the same episodes whatever the policy.
-    """
-    from snakesim import _core
-    from snakesim.config import action_array, env_config
-    from snakesim.env import make_env
-
-    if episodes < 1:
-        raise ValueError(f"episodes must be at least 1, got {episodes}")
-    config = make_env(**env_kwargs).config
-    step_seconds = config["snake"]["dt"] * config["physics_steps_per_env_step"]
-    snake = config["snake"]
-    weight = (snake["base_mass"] + snake["joints"] * snake["link_mass"]) * abs(snake["gravity"])
-    m = min(episodes, max_envs)
-    targets = [(episodes + i) // m for i in range(m)]  # as SB3's evaluate_policy splits them
-    counts = [0] * m
-    # The batched Rust env itself (as SnakeVecEnv steps it, without needing Stable-Baselines3): env i
-    # is seeded with seed + i; each finished episode comes with its last observation and info.
-    venv = _core.VecEnv(env_config(**env_kwargs), m)
-    obs = venv.reset(seed)
-    done_episodes: list[Episode] = []
-    while counts != targets:
-        obs, _, _, _, finals = venv.step(action_array(act(obs)))
-        for i, final, info in sorted(finals, key=lambda done: done[0]):
-            if counts[i] >= targets[i]:
-                continue
-            start = info["start"]
-            done_episodes.append(
-                Episode(
-                    ret=float(info["episode_return"]),
-                    steps=int(info["episode_step"]),
-                    success=bool(info["success"]),
-                    seconds=int(info["episode_step"]) * step_seconds,
-                    distance=float(math.hypot(final[0] - start[0], final[1] - start[1])),
-                    path_length=float(info["path_length"]),
-                    work=float(info["work"]),
-                    weight=weight,
-                )
-            )
-            counts[i] += 1
-    return done_episodes
-
-
-def summarize(episodes: list[Episode]) -> dict[str, Any]:
-    """Mean/std return, success rate (with its 95 % Wilson interval), mean steps and seconds to goal
-    (successes only), mean speed, path efficiency and cost of transport (over all episodes)."""
-    returns = np.array([e.ret for e in episodes])
-    wins = [e for e in episodes if e.success]
-    return {
-        "episodes": len(episodes),
-        "success_rate": len(wins) / len(episodes),
-        "success_rate_ci95": list(wilson_interval(len(wins), len(episodes))),
-        "mean_return": float(returns.mean()),
-        "std_return": float(returns.std()),
-        "mean_steps_to_goal": float(np.mean([e.steps for e in wins])) if wins else None,
-        "mean_seconds_to_goal": float(np.mean([e.seconds for e in wins])) if wins else None,
-        "mean_speed": float(np.mean([e.speed for e in episodes])),
-        "mean_path_efficiency": _mean([e.path_efficiency for e in episodes]),
-        "mean_cost_of_transport": _mean([e.cost_of_transport for e in episodes]),
-        "mean_length": float(np.mean([e.steps for e in episodes])),
-    }
-
-
-def evaluate(agent: Agent, episodes: int, seed: int, deterministic: bool = True) -> dict[str, Any]:
-    """:func:`summarize` of ``episodes`` episodes of the agent, with the per-episode figures."""
-    done = run_episodes(lambda obs: agent.act(obs, deterministic), agent.env_kwargs, episodes, seed)
-    out = summarize(done)
-    out["per_episode"] = [
-        {
-            "return": e.ret,
-            "steps": e.steps,
-            "success": e.success,
-            "seconds": e.seconds,
-            "speed": e.speed,
-            "path_efficiency": e.path_efficiency,
-            "cost_of_transport": e.cost_of_transport,
-        }
-        for e in done
-    ]
-    return out

@@ -33,15 +33,15 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from snakesim.policies import policy_kwargs
-    from snakesim.sb3 import SnakeVecEnv
+    from snakesim.envs.sb3 import SnakeVecEnv
+    from snakesim.runs.policies import policy_kwargs
 
     if agent.kind != "native":
         raise ValueError(f"{agent.path} is not a native model (it is already an SB3 model)")
     env = SnakeVecEnv(1, **agent.env_kwargs)
     hyper: dict[str, Any] = {}
     if agent.config is not None:
-        from snakesim import runconfig
+        from snakesim.runs import config as runconfig
 
         ppo = agent.config["ppo"]
         hyper = {

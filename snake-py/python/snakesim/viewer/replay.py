@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from snakesim.config import LIMITS
-from snakesim.render import _yaw
+from snakesim.envs.render import _yaw
+from snakesim.limits import LIMITS
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 ANIMATION_SUFFIXES = (".gif", ".mp4")
@@ -66,7 +66,7 @@ def record(
     """Runs one episode of ``act(obs_batch) -> actions`` in a SnakeEnv; stops early after ``seconds``.
     ``env``: an env made from ``env_kwargs`` to run instead of a new one (possibly wrapped, e.g. in
     :class:`snakesim.wrappers.RerunLogger`)."""
-    from snakesim.env import make_env
+    from snakesim.envs.env import make_env
 
     if env is None:
         env = make_env(**env_kwargs)

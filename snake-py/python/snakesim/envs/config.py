@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from snakesim import _core
+from snakesim.limits import LIMITS
 
 #: Every SnakeEnv keyword with its default (``snake``, the preset's physical parameters, aside).
 ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("paper"))
@@ -24,9 +25,6 @@ TABLE_KEYWORDS = ("start", "reward", "snake", "action")
 #: Every keyword an env accepts: ``task`` ("paper" or "goal") picks the defaults the others override.
 ENV_KEYWORDS = ("task", *ENV_DEFAULTS, *(k for k in TABLE_KEYWORDS if k not in ENV_DEFAULTS))
 PRESETS: tuple[str, ...] = tuple(_core.PRESETS)
-#: Every limit on sizes, ranges and durations, from the Rust side (snake-core's ``limits`` and the
-#: run configuration's).
-LIMITS: dict[str, Any] = dict(_core.LIMITS)
 
 
 def plain(value: Any, where: str) -> Any:

@@ -12,10 +12,10 @@ import numpy as np
 from gymnasium import spaces
 
 from snakesim import _core
-from snakesim.config import ENV_DEFAULTS as _D
-from snakesim.config import GOAL_ENV_DEFAULTS as _G
-from snakesim.config import action_array, env_config
-from snakesim.render import top_down
+from snakesim.envs.config import ENV_DEFAULTS as _D
+from snakesim.envs.config import GOAL_ENV_DEFAULTS as _G
+from snakesim.envs.config import action_array, env_config
+from snakesim.envs.render import top_down
 
 
 class SnakeEnv(gymnasium.Env):
@@ -70,7 +70,7 @@ class SnakeEnv(gymnasium.Env):
     ``preset`` are ignored), ``render_mode`` (None or "rgb_array").
 
     **Limits**: positions (start x, y; goals) within 10 km, start heights 0-100 m, reward weights within
-    1e6, ``physics_steps_per_env_step`` at most 240, episodes at most 10^7 steps (``snakesim.config.LIMITS``
+    1e6, ``physics_steps_per_env_step`` at most 240, episodes at most 10^7 steps (``snakesim.limits.LIMITS``
     holds them all); a value outside raises ``ValueError`` naming the field. Observations and rewards are
     finite, or ``step()`` raises. One env may be used from several threads: calls take turns.
 

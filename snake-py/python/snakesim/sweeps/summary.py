@@ -13,8 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from snakesim.files import write_atomically
-from snakesim.sweep import Trial
-from snakesim.train import EVALUATIONS_FILE, read_evaluations
+from snakesim.runs.rundir import EVALUATIONS_FILE, read_evaluations
+from snakesim.sweeps.plan import Trial
 
 SUMMARY_FILE = "summary.csv"
 #: The success rate a run has learnt the task at (the first evaluation reaching it counts).

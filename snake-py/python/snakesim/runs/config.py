@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import _core
-from snakesim.config import plain
+from snakesim.envs.config import plain
 from snakesim.files import write_atomically
 
 #: Every key with its default, from Rust.

@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from snakesim.config import LIMITS
-from snakesim.rerun_log import MAX_SECONDS, RecordingError
+from snakesim.limits import LIMITS
+from snakesim.viewer.recording import MAX_SECONDS, RecordingError
 
 DEFAULT_WEB_PORT = 9090
 DEFAULT_GRPC_PORT = 9876
@@ -77,8 +76,8 @@ def wants_rerun(args: argparse.Namespace) -> bool:
 
 def check_outputs(args: argparse.Namespace) -> Path | None:
     """Checks --rrd, --spawn and --serve before anything runs; returns the --rrd path."""
-    from snakesim.cli import UserError, check_writable
-    from snakesim.rerun_log import check_display, check_port_free
+    from snakesim.cli.errors import UserError, check_writable
+    from snakesim.viewer.processes import check_display, check_port_free
 
     rrd = None
     if args.rrd is not None:
@@ -106,7 +105,7 @@ class Recorded:
 
     def serve(self) -> int:
         """Serves the recording with --serve (until Ctrl-C); 0."""
-        from snakesim.rerun_log import serve
+        from snakesim.viewer.processes import serve
 
         if self.served is None:
             return 0
@@ -124,7 +123,8 @@ class Recorded:
 def _record(args: argparse.Namespace, rrd: Path | None, log_into, label: str) -> Recorded:
     """Makes the recording (``log_into(recording, recorded)``) for --rrd and --spawn, and for --serve
     in a temporary file unless --rrd names one."""
-    from snakesim.rerun_log import recording_to, spawn_viewer
+    from snakesim.viewer.processes import spawn_viewer
+    from snakesim.viewer.recording import recording_to
 
     spawn_url = spawn_viewer() if args.spawn else None
     recorded = Recorded(args)
@@ -150,7 +150,7 @@ def _record(args: argparse.Namespace, rrd: Path | None, log_into, label: str) ->
 
 # -- replay ---------------------------------------------------------------------------------------
 def check_replay(args: argparse.Namespace) -> Path | None:
-    from snakesim.cli import UserError
+    from snakesim.cli.errors import UserError
 
     if not 1 <= args.episodes <= MAX_EPISODES:
         raise UserError(f"--episodes must be in [1, {MAX_EPISODES}], got {args.episodes}")
@@ -164,9 +164,9 @@ def check_replay(args: argparse.Namespace) -> Path | None:
 def replay(args: argparse.Namespace, agent: Any, rrd: Path | None) -> Recorded:
     """Records ``args.episodes`` episodes of ``agent`` for --rrd/--spawn/--serve (``serve()`` the
     result to serve it)."""
-    from snakesim import replay as replay_module
-    from snakesim.env import make_env
-    from snakesim.wrappers import RerunLogger
+    from snakesim.envs.env import make_env
+    from snakesim.envs.wrappers import RerunLogger
+    from snakesim.viewer import replay as replay_module
 
     config = make_env(**agent.env_kwargs).config
     dt = config["snake"]["dt"]
@@ -199,108 +199,3 @@ def replay(args: argparse.Namespace, agent: Any, rrd: Path | None) -> Recorded:
         env.close()
 
     return _record(args, rrd, log_into, f"{Path(agent.path).name}, seed {args.seed}")
-
-
-# -- convert --------------------------------------------------------------------------------------
-def cmd_convert(args: argparse.Namespace) -> int:
-    from snakesim.cli import UserError
-    from snakesim.rerun_log import _rerun, log_trace, read_trace_header
-
-    if args.check:
-        _rerun()
-        return 0
-    if args.trace is None:
-        raise UserError("give the physics trace to convert (TRACE.csv, from snake-cli run --trace)")
-    if not wants_rerun(args):
-        raise UserError("give --rrd FILE.rrd, --spawn or --serve")
-    rrd = check_outputs(args)
-    meta, _ = read_trace_header(args.trace)
-    steps = meta.get("steps")
-    if isinstance(steps, (int, float)) and steps * float(meta["dt"]) > MAX_SECONDS + 1e-9:
-        raise RecordingError(
-            f"{args.trace} holds {steps * float(meta['dt']):g} simulated seconds, more than the "
-            f"{MAX_SECONDS:g} a recording holds"
-        )
-    counted: list[int] = []
-
-    def log_into(recording, recorded: Recorded) -> None:
-        counted.append(log_trace(recording, args.trace))
-
-    label = f"{meta.get('source', 'trace')}: {meta['joints']} joints"
-    if "preset" in meta:
-        label += f", preset {meta['preset']}"
-    recorded = _record(args, rrd, log_into, label)
-    if not args.quiet:
-        print(f"recorded {counted[0]} physics steps of {meta['joints']} joints")
-    return recorded.serve()
-
-
-# -- view -----------------------------------------------------------------------------------------
-def cmd_view(args: argparse.Namespace) -> int:
-    from snakesim.cli import UserError
-    from snakesim.rerun_log import check_display, check_port_free, rerun_executable, serve, spawn_file
-
-    path = Path(args.recording)
-    if not path.is_file():
-        raise UserError(f"cannot open {path}: no such file")
-    if not os.access(path, os.R_OK):
-        raise UserError(f"cannot open {path}: not readable")
-    if args.spawn == args.serve:
-        raise UserError("give one of --spawn (native viewer) or --serve (web viewer)")
-    _check_rrd(path)
-    if args.spawn:
-        check_display()
-        spawn_file(path)
-        print(f"opened {path} in Rerun's native viewer ({rerun_executable()})")
-        return 0
-    if args.web_port == args.grpc_port:
-        raise UserError("--web-port and --grpc-port must differ")
-    check_port_free(args.web_port, "--web-port")
-    check_port_free(args.grpc_port, "--grpc-port")
-
-    def ready(url: str) -> None:
-        print(f"serving Rerun's web viewer at {url} (Ctrl-C to stop)", flush=True)
-
-    return serve(path, web_port=args.web_port, grpc_port=args.grpc_port, ready=ready)
-
-
-def _check_rrd(path: Path) -> None:
-    """RecordingError unless ``path`` is an RRD file with a recording in it."""
-    from snakesim.rerun_log import _rerun
-
-    rr = _rerun()
-    try:
-        recordings = rr.chunk.RrdReader(path).recordings()
-    except (RuntimeError, ValueError, OSError) as error:
-        raise RecordingError(
-            f"cannot open {path}: not a Rerun recording ({' '.join(str(error).split())})"
-        ) from None
-    if not recordings:
-        raise RecordingError(f"cannot open {path}: it holds no recording")
-
-
-def add_commands(sub: Any) -> None:
-    """The ``convert`` and ``view`` subcommands."""
-    p = sub.add_parser(
-        "convert",
-        help="a physics trace (snake-cli run --trace) as a Rerun recording",
-        description="Log a physics trace written by snake-cli run --trace to Rerun: the cubes in 3D at every "
-        "physics step and plots of the joints (snake-cli run --rrd does this for you).",
-    )
-    p.add_argument("trace", metavar="TRACE.csv", nargs="?", help="the physics trace")
-    add_viewer_options(p, rrd_help="write the recording here")
-    p.add_argument("--quiet", action="store_true", help="print nothing on success")
-    p.add_argument("--check", action="store_true", help=argparse.SUPPRESS)  # snake-cli: can we record?
-    p.set_defaults(func=cmd_convert)
-
-    p = sub.add_parser(
-        "view",
-        help="open a Rerun recording (.rrd) in the native or the web viewer",
-        description="Open a recording written by snake-cli run --rrd or snakesim replay --rrd.",
-    )
-    p.add_argument("recording", metavar="FILE.rrd")
-    p.add_argument("--spawn", action="store_true", help="Rerun's native viewer (needs a display)")
-    p.add_argument("--serve", action="store_true", help="Rerun's web viewer on 127.0.0.1 until Ctrl-C")
-    p.add_argument("--web-port", type=_port, default=DEFAULT_WEB_PORT, help=f"default {DEFAULT_WEB_PORT}")
-    p.add_argument("--grpc-port", type=_port, default=DEFAULT_GRPC_PORT, help=f"default {DEFAULT_GRPC_PORT}")
-    p.set_defaults(func=cmd_view)

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from snakesim import runconfig
-from snakesim.train import EVALUATIONS_FILE, read_evaluations
+from snakesim.runs import config as runconfig
+from snakesim.runs.rundir import EVALUATIONS_FILE, read_evaluations
 
 METRICS = {
     "mean_return": "mean evaluation return",
@@ -77,7 +77,7 @@ def load_curve(source: str | os.PathLike) -> Curve:
 
 def sweep_runs(folder: str | os.PathLike) -> list[tuple[Path, str]]:
     """The evaluated trials of a sweep (or search) folder as (run directory, label), in plan order."""
-    from snakesim import sweep
+    from snakesim.sweeps import plan as sweep
 
     try:
         manifest = sweep.read_manifest(folder)
@@ -96,7 +96,7 @@ def sweep_runs(folder: str | os.PathLike) -> list[tuple[Path, str]]:
 
 def load_curves(sources: Sequence[str | os.PathLike]) -> list[Curve]:
     """Each source's curve; a sweep folder gives its trials', labelled by config and grid point."""
-    from snakesim.sweep import is_sweep
+    from snakesim.sweeps.plan import is_sweep
 
     curves = []
     for source in sources:

@@ -11,7 +11,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from snakesim import _core
-from snakesim.config import action_array, env_config
+from snakesim.envs.config import action_array, env_config
 
 
 class SnakeVectorEnv(VectorEnv):

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import extras
-from snakesim.sweep import (
+from snakesim.sweeps.plan import (
     CONNECT_TIMEOUT_S,
     TRIAL_LOCK_WAIT_S,
     TUNE_DIR,
@@ -45,9 +45,6 @@ extras.require("sweep")
 
 #: Each training session of a trial, one JSON line, in its run directory.
 SESSIONS_FILE = "sessions.jsonl"
-#: Test hook: the trial of this name kills its own worker (SIGKILL) once, after reporting its first
-#: checkpoint, to exercise retries.
-KILL_ENV = "SNAKESIM_TEST_KILL_TRIAL"
 #: What a trial reports to Tune from each evaluation row.
 METRICS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
 
@@ -92,20 +89,33 @@ def _quiet_ray_init(**kwargs: Any) -> None:
     ray.init(include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False, **kwargs)
 
 
-def _token_auth_if_available() -> None:
+def _ray_token_exists() -> bool:
+    """Whether a Ray authentication token is at hand where Ray's documentation says Ray looks for one:
+    ``RAY_AUTH_TOKEN``, the file ``RAY_AUTH_TOKEN_PATH`` names, or ``~/.ray/auth_token``."""
+    if os.environ.get("RAY_AUTH_TOKEN"):
+        return True
+    path = os.environ.get("RAY_AUTH_TOKEN_PATH") or os.path.join(
+        os.path.expanduser("~"), ".ray", "auth_token"
+    )
+    return os.path.isfile(path)
+
+
+@contextlib.contextmanager
+def _token_auth_if_available(address: str | None):
     """Ray turns token authentication on by itself when it starts a local cluster or finds one, if
-    a token exists (~/.ray/auth_token, RAY_AUTH_TOKEN), but not for an explicit address: a cluster
-    started with `ray start` by the same user would refuse us. Do as Ray does for local clusters (a
-    cluster without authentication accepts a driver that has a token)."""
-    if "RAY_AUTH_MODE" in os.environ:
+    a token exists, but not for an explicit address: a cluster started with `ray start` by the same
+    user would refuse us. Do as Ray does for local clusters (a cluster without authentication accepts
+    a driver that has a token), through Ray's public switch ``RAY_AUTH_MODE=token``, set for as long as
+    the driver is connected and restored afterwards. Ray reads it when it is first imported, so a
+    process that imported Ray before (a library user) sets ``RAY_AUTH_MODE=token`` itself."""
+    if address is None or "RAY_AUTH_MODE" in os.environ or not _ray_token_exists():
+        yield
         return
+    os.environ["RAY_AUTH_MODE"] = "token"
     try:
-        from ray._private.authentication.authentication_token_setup import (
-            maybe_enable_token_auth_if_token_available,
-        )
-    except ImportError:  # a Ray without token authentication
-        return
-    maybe_enable_token_auth_if_token_available(warn_if_disabled=False)
+        yield
+    finally:
+        os.environ.pop("RAY_AUTH_MODE", None)
 
 
 #: Bytes Ray adds below its temp folder for its longest socket path (session_..._<pid>/sockets/plasma_store).
@@ -134,6 +144,21 @@ def _local_ray_scratch() -> str:
 
     atexit.register(remove)
     return scratch
+
+
+@contextlib.contextmanager
+def connected(address: str | None, cpus_per_trial: int = 1, timeout: float = CONNECT_TIMEOUT_S):
+    """:func:`connect` for the block, which gets the description: when it ends, this process leaves
+    Ray and the settings it changed for Ray are restored."""
+    # Ray reads RAY_AUTH_MODE into its configuration when it is first imported: switch first.
+    with _token_auth_if_available(address):
+        import ray
+
+        try:
+            yield connect(address, cpus_per_trial, timeout)
+        finally:
+            if ray.is_initialized():
+                ray.shutdown()
 
 
 def connect(address: str | None, cpus_per_trial: int = 1, timeout: float = CONNECT_TIMEOUT_S) -> str:
@@ -165,7 +190,6 @@ def connect(address: str | None, cpus_per_trial: int = 1, timeout: float = CONNE
             failure.append(error)
 
     with _stderr_silenced():
-        _token_auth_if_available()
         thread = threading.Thread(target=init, name="snakesim-ray-connect", daemon=True)
         thread.start()
         thread.join(max(0.0, timeout - (time.monotonic() - started)))
@@ -230,12 +254,12 @@ class _Reporter:
     def __call__(self, row: Mapping[str, Any]) -> None:
         from ray import tune
 
-        from snakesim import agents
+        from snakesim.runs import rundir
 
         self.note_session()  # a new run's folder exists from its first evaluation on
         metrics = {key: row.get(key) for key in METRICS}
         metrics["resumed_from"] = self.started_from
-        found = agents.checkpoints(self.run_dir, native=self.native)
+        found = rundir.checkpoints(self.run_dir, native=self.native)
         if not found or found[-1][0] <= self.reported_checkpoint:
             tune.report(metrics)
             return
@@ -244,10 +268,7 @@ class _Reporter:
             pointer = {"run_dir": str(self.run_dir), "checkpoint": str(found[-1][1]), "timesteps": steps}
             (Path(folder) / "run_checkpoint.json").write_text(json.dumps(pointer) + "\n")
             tune.report(metrics, checkpoint=tune.Checkpoint.from_directory(folder))
-        first = self.reported_checkpoint == 0
         self.reported_checkpoint = steps
-        if first and self.started_from == 0 and os.environ.get(KILL_ENV) == self.name:
-            os.kill(os.getpid(), signal.SIGKILL)
 
 
 def train_trial(param: Mapping[str, Any]) -> None:
@@ -255,7 +276,8 @@ def train_trial(param: Mapping[str, Any]) -> None:
     resuming it when it has checkpoints (a retry, or a resumed sweep)."""
     from ray import tune
 
-    from snakesim import agents, runconfig
+    from snakesim.runs import config as runconfig
+    from snakesim.runs import rundir
 
     spec = param["trial"]
     run_dir = Path(spec["run_dir"])
@@ -268,14 +290,14 @@ def train_trial(param: Mapping[str, Any]) -> None:
         lock_folder(run_dir, TRIAL_LOCK_WAIT_S, "run directory").release()
     if trial_finished(run_dir):
         # Trained to the end by an earlier attempt that died before Tune heard of it.
-        from snakesim.train import EVALUATIONS_FILE, read_evaluations
+        from snakesim.runs.rundir import EVALUATIONS_FILE, read_evaluations
 
         rows = read_evaluations(run_dir / EVALUATIONS_FILE)
         if rows:
             tune.report({key: rows[-1][key] for key in METRICS})
         return
-    found = agents.checkpoints(run_dir, native=native)
-    resume = bool(found) and (run_dir / agents.CONFIG_FILE).is_file()
+    found = rundir.checkpoints(run_dir, native=native)
+    resume = bool(found) and (run_dir / rundir.CONFIG_FILE).is_file()
     earlier = ""
     if not resume and run_dir.exists():
         # An attempt that died before its first checkpoint: start again (the trainers want an empty
@@ -286,13 +308,13 @@ def train_trial(param: Mapping[str, Any]) -> None:
     reporter = _Reporter(run_dir, native, spec["name"], found[-1][0] if resume else 0, earlier)
     # Both trainers log to stderr: the worker's log file in Ray's log folder.
     if native:
-        from snakesim.native import NativeTrainer
+        from snakesim.runs.native import NativeTrainer
 
         trainer: Any = NativeTrainer(
             spec["overrides"], run_dir, resume=resume, progress=False, on_evaluation=reporter
         )
     else:
-        from snakesim.train import Trainer
+        from snakesim.runs.sb3_trainer import Trainer
 
         trainer = Trainer(spec["overrides"], run_dir, resume=resume, progress=False, on_evaluation=reporter)
     if resume:
@@ -379,6 +401,27 @@ def _tune_callback(display: _Display, names: Callable[[Any], str]):
     return Progress()
 
 
+@contextlib.contextmanager
+def scoped_settings(env: Mapping[str, str] = {}, loggers: Mapping[str, int] = {}):  # noqa: B006 - read only
+    """Sets environment variables and logger levels for the block and restores the process's own
+    afterwards: a library call leaves the process as it found it."""
+    saved_env = {key: os.environ.get(key) for key in env}
+    saved_levels = {name: logging.getLogger(name).level for name in loggers}
+    os.environ.update(env)
+    for name, level in loggers.items():
+        logging.getLogger(name).setLevel(level)
+    try:
+        yield
+    finally:
+        for key, value in saved_env.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+        for name, level in saved_levels.items():
+            logging.getLogger(name).setLevel(level)
+
+
 class _CtrlC:
     """The first Ctrl-C stops the trials (Tune ends them and returns); the second one quits at once."""
 
@@ -386,8 +429,6 @@ class _CtrlC:
         self.pressed = False
 
     def __enter__(self):
-        # Tune's own handler would stop the run without telling us; ours tells the stopper below.
-        os.environ["TUNE_DISABLE_SIGINT_HANDLER"] = "1"
         self.previous = signal.getsignal(signal.SIGINT)
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, self.handle)
@@ -434,10 +475,6 @@ def fit(
     error of each failed trial and whether Ctrl-C stopped it."""
     from ray import tune
 
-    # Tune's tables and error tracebacks: the display and our one-line errors replace them.
-    os.environ["RAY_AIR_NEW_OUTPUT"] = "0"
-    logging.getLogger("ray.tune").setLevel(logging.CRITICAL)
-    logging.getLogger("ray.train").setLevel(logging.CRITICAL)
     show = sys.stderr.isatty() if progress is None else progress
     display = _Display(total, show, sys.stderr.isatty())
     storage = (out / TUNE_DIR).resolve()
@@ -447,7 +484,13 @@ def fit(
     tune_config.reuse_actors = True
     tune_config.trial_name_creator = names
     tune_config.trial_dirname_creator = names
-    with _CtrlC() as ctrl_c:
+    # Tune's tables and error tracebacks: the display and our one-line errors replace them. Tune's own
+    # Ctrl-C handler would stop the run without telling us; ours (_CtrlC) tells the stopper.
+    quiet = scoped_settings(
+        env={"RAY_AIR_NEW_OUTPUT": "0", "TUNE_DISABLE_SIGINT_HANDLER": "1"},
+        loggers={"ray.tune": logging.CRITICAL, "ray.train": logging.CRITICAL},
+    )
+    with quiet, _CtrlC() as ctrl_c:
         tuner = tune.Tuner(
             tune.with_resources(trainable, {"cpu": cpus_per_trial}),
             param_space=dict(param_space),

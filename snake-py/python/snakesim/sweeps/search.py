@@ -2,7 +2,7 @@
 
 Optuna picks each trial's values of the keys in the space (Tune's ``OptunaSearch``) and ASHA stops the
 trials that trail the others at the same timesteps; every trial is a run directory under the search's
-folder, as in a sweep (:mod:`snakesim.sweep`). The best trial's configuration is written as
+folder, as in a sweep (:mod:`snakesim.sweeps.sweep`). The best trial's configuration is written as
 ``best.yaml``, which ``snakesim train --config`` runs.
 
 The space is YAML: every key a configuration key (dotted, or nested mappings), every value one
@@ -24,9 +24,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim import extras, runconfig, sweep
-from snakesim.config import LIMITS
+from snakesim import extras
 from snakesim.files import write_atomically
+from snakesim.limits import LIMITS
+from snakesim.runs import config as runconfig
+from snakesim.sweeps import plan as sweep
 
 DISTRIBUTIONS = ("uniform", "loguniform", "randint", "choice")
 METRICS = ("success_rate", "mean_return")
@@ -113,7 +115,7 @@ def train_search_trial(params: Mapping[str, Any], base: Mapping[str, Any], trial
     """The Tune trainable of a search: the base configuration with the trial's values."""
     from ray import tune
 
-    from snakesim.tune_runner import train_trial
+    from snakesim.sweeps.tune_runner import train_trial
 
     name = tune.get_context().get_trial_name()
     overrides = _overrides(base, {key: _plain(value) for key, value in params.items()})
@@ -168,60 +170,66 @@ def search(
     resolved = runconfig.resolve(base)
     parsed = load_space(space, base)
     extras.require("sweep")
-    from ray import tune
-    from ray.tune.schedulers import ASHAScheduler
-    from ray.tune.search.optuna import OptunaSearch
+    from snakesim.sweeps import summary as sweep_summary
+    from snakesim.sweeps import tune_runner
 
-    from snakesim import sweep_summary, tune_runner
-
-    client = tune_runner.connect(address, cpus_per_trial)
-    with sweep.start_folder(
-        out_path,
-        sweep.new_manifest(
-            "search",
-            [],
-            config=os.fspath(config),
-            space={key: {kind: args} for key, (kind, args) in parsed.items()},
-            set=list(sets),
-            metric=metric,
-            budget=trials,
-            cpus_per_trial=cpus_per_trial,
-            max_failures=max_failures,
+    with (
+        tune_runner.connected(address, cpus_per_trial) as client,
+        sweep.start_folder(
+            out_path,
+            sweep.new_manifest(
+                "search",
+                [],
+                config=os.fspath(config),
+                space={key: {kind: args} for key, (kind, args) in parsed.items()},
+                set=list(sets),
+                metric=metric,
+                budget=trials,
+                cpus_per_trial=cpus_per_trial,
+                max_failures=max_failures,
+            ),
         ),
     ):
         print(
             f"search {out_path}: {trials} trials of {name} over {', '.join(parsed)} on {client}", flush=True
         )
+        # Ray is imported once connected (tune_runner.connected switches its authentication first).
         import optuna
+        from ray import tune
+        from ray.tune.schedulers import ASHAScheduler
+        from ray.tune.search.optuna import OptunaSearch
 
-        optuna.logging.set_verbosity(
-            optuna.logging.WARNING
-        )  # its "study created" line; the display says more
-        timesteps = resolved["timesteps"]
-        tune_config = tune.TuneConfig(
-            search_alg=OptunaSearch(metric=metric, mode="max", seed=resolved["seed"]),
-            scheduler=ASHAScheduler(
-                time_attr="timesteps",
-                metric=metric,
-                mode="max",
-                max_t=timesteps,
-                grace_period=max(1, int(timesteps * GRACE_SHARE)),
-                reduction_factor=ASHA_REDUCTION_FACTOR,
-            ),
-            num_samples=trials,
-        )
-        trials_dir = (out_path / sweep.TRIALS_DIR).resolve()
-        outcome = tune_runner.fit(
-            out_path,
-            tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir)),
-            _tune_space(parsed),
-            total=trials,
-            names=_numbered(),
-            cpus_per_trial=cpus_per_trial,
-            max_failures=max_failures,
-            progress=progress,
-            tune_config=tune_config,
-        )
+        # Optuna's "study created" line: the display says more. Its level is restored afterwards.
+        verbosity = optuna.logging.get_verbosity()
+        optuna.logging.set_verbosity(optuna.logging.WARNING)
+        try:
+            timesteps = resolved["timesteps"]
+            tune_config = tune.TuneConfig(
+                search_alg=OptunaSearch(metric=metric, mode="max", seed=resolved["seed"]),
+                scheduler=ASHAScheduler(
+                    time_attr="timesteps",
+                    metric=metric,
+                    mode="max",
+                    max_t=timesteps,
+                    grace_period=max(1, int(timesteps * GRACE_SHARE)),
+                    reduction_factor=ASHA_REDUCTION_FACTOR,
+                ),
+                num_samples=trials,
+            )
+            trials_dir = (out_path / sweep.TRIALS_DIR).resolve()
+            outcome = tune_runner.fit(
+                out_path,
+                tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir)),
+                _tune_space(parsed),
+                total=trials,
+                names=_numbered(),
+                cpus_per_trial=cpus_per_trial,
+                max_failures=max_failures,
+                progress=progress,
+                tune_config=tune_config,
+            )
+        finally:
+            optuna.logging.set_verbosity(verbosity)
         done = _searched_trials(out_path, name, base, list(parsed))
         rows = sweep_summary.summarize(out_path, done)
         print(sweep_summary.format_table(rows))
@@ -270,7 +278,7 @@ def _searched_trials(
 
 def _best(out: Path, trials: Sequence[sweep.Trial], metric: str) -> tuple[sweep.Trial, float] | None:
     """The trial with the best final evaluation (more timesteps break ties: ASHA stopped the others)."""
-    from snakesim.sweep_summary import evaluations
+    from snakesim.sweeps.summary import evaluations
 
     scored = []
     for trial in trials:

@@ -21,7 +21,6 @@ same start states, so successive points of a learning curve differ by the policy
 from __future__ import annotations
 
 import csv
-import dataclasses
 import json
 import math
 import os
@@ -32,62 +31,23 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from snakesim import _core, agents, extras, runconfig
+from snakesim import _core, extras
+from snakesim.agents.evaluation import run_episodes, summarize
+from snakesim.agents.loading import AgentError, inspect_model
 from snakesim.files import write_atomically
-
-EVAL_FIELDS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
-EVALUATIONS_FILE = "evaluations.csv"
-VERSIONS_FILE = "versions.json"
-TB_DIR = "tb"
-TB_NAME = "PPO"
-
-
-class RunDirError(ValueError):
-    """A run directory that cannot be used as asked (exists, missing, nothing to resume, ...)."""
-
-
-class TrainingFailed(RuntimeError):
-    """Training stopped on an error of the run itself (a loss or gradient became non-finite, an env
-    blew up); the message says where, and what was saved."""
-
-
-class TrainingInterrupted(Exception):
-    """Ctrl-C during training; a checkpoint was saved at ``timesteps`` in ``path``."""
-
-    def __init__(self, timesteps: int, path: Path) -> None:
-        super().__init__(f"interrupted at {timesteps} timesteps; saved {path}")
-        self.timesteps = timesteps
-        self.path = path
-
-
-@dataclasses.dataclass
-class TrainResult:
-    run_dir: Path
-    start_timesteps: int
-    timesteps: int
-    seconds: float  # wall time of this session's training, evaluations included
-    eval_seconds: float
-    last_evaluation: dict[str, Any] | None
-    details: dict[str, Any] | None = None  # the native trainer's split of the time, threads, memory
-
-    @property
-    def timesteps_per_second(self) -> float:
-        return (self.timesteps - self.start_timesteps) / self.seconds if self.seconds > 0 else 0.0
-
-    @property
-    def training_timesteps_per_second(self) -> float:
-        busy = self.seconds - self.eval_seconds
-        return (self.timesteps - self.start_timesteps) / busy if busy > 0 else 0.0
-
-
-def lock_run_dir(run_dir: Path, *, new_run: bool):
-    """The run directory's writer lock (``snakesim._core.WriterLock``), held until released: a new run's
-    folder must be absent or empty (it is created), a resumed run's must exist; RunDirError naming the
-    process that writes it when another one does."""
-    try:
-        return _core.lock_run_dir(os.fspath(run_dir), new_run)
-    except ValueError as error:
-        raise RunDirError(str(error)) from None
+from snakesim.runs import config as runconfig
+from snakesim.runs import rundir
+from snakesim.runs.results import TrainingInterrupted, TrainResult, format_eval
+from snakesim.runs.rundir import (
+    EVAL_FIELDS,
+    EVALUATIONS_FILE,
+    TB_DIR,
+    TB_NAME,
+    VERSIONS_FILE,
+    RunDirError,
+    default_run_dir,
+    lock_run_dir,
+)
 
 
 def package_versions() -> dict[str, str]:
@@ -96,53 +56,14 @@ def package_versions() -> dict[str, str]:
     import stable_baselines3
     import torch
 
-    import snakesim
-
     return {
-        "snakesim": snakesim.__version__,
+        "snakesim": _core.__version__,
         "stable_baselines3": stable_baselines3.__version__,
         "torch": torch.__version__,
         "gymnasium": gymnasium.__version__,
         "numpy": numpy.__version__,
         "python": platform.python_version(),
     }
-
-
-def default_run_dir(config: Mapping[str, Any]) -> Path:
-    """``runs/ppo-ARCH-JOINTS-PRESET-seedSEED``, as ``snake-cli train`` (snake-rl decides)."""
-    return Path(_core.default_run_dir(json.dumps(dict(config))))
-
-
-def _format_eval(evaluation: Mapping[str, Any]) -> str:
-    return f"eval R {evaluation['mean_return']:.0f}, success {evaluation['success_rate']:.0%}"
-
-
-def _csv_value(value: Any) -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "nan"
-    return repr(value) if isinstance(value, float) else str(value)
-
-
-def read_evaluations(path: str | os.PathLike) -> list[dict[str, float]]:
-    """Rows of an evaluations.csv as floats (``nan`` where no episode reached the goal)."""
-    with open(path, newline="", encoding="utf-8") as f:
-        reader = csv.DictReader(f)
-        if reader.fieldnames is None or not set(EVAL_FIELDS) <= set(reader.fieldnames):
-            raise ValueError(
-                f"{os.fspath(path)} is not an evaluations.csv (expected columns {', '.join(EVAL_FIELDS)})"
-            )
-        rows = []
-        for row in reader:
-            try:
-                rows.append({key: float(row[key]) for key in EVAL_FIELDS})
-            except (TypeError, ValueError):
-                raise ValueError(_bad_row(path, reader.line_num, row.values())) from None
-        return rows
-
-
-def _bad_row(path: str | os.PathLike, line: int, cells) -> str:
-    text = ",".join(str(c) for c in cells if c is not None)
-    return f"{os.fspath(path)}: line {line} is not an evaluation row: {text[:80]!r}"
 
 
 class _Callback:
@@ -202,7 +123,7 @@ class _Callback:
 
             def refresh(self) -> None:
                 if self.bar is not None and self.trainer.last_evaluation is not None:
-                    self.bar.set_postfix_str(_format_eval(self.trainer.last_evaluation))
+                    self.bar.set_postfix_str(format_eval(self.trainer.last_evaluation))
 
             def close(self) -> None:
                 if self.bar is not None:
@@ -264,9 +185,9 @@ class Trainer:
     def _resume_config(self, overrides: Mapping[str, Any]) -> dict[str, Any]:
         """The saved configuration with ``overrides``; picks the newest checkpoint that is whole (its
         zip readable, its note parsed), naming each newer one it skips."""
-        config_path = self.run_dir / agents.CONFIG_FILE
+        config_path = self.run_dir / rundir.CONFIG_FILE
         if not config_path.is_file():
-            raise RunDirError(f"cannot resume {self.run_dir}: no {agents.CONFIG_FILE} there")
+            raise RunDirError(f"cannot resume {self.run_dir}: no {rundir.CONFIG_FILE} there")
         saved = runconfig.load(config_path)
         config = runconfig.resolve(runconfig.merge(saved, overrides))
         for key in runconfig.IDENTITY_KEYS:
@@ -275,15 +196,15 @@ class Trainer:
                     f"cannot change {key} when resuming "
                     f"({self.run_dir} has {saved[key]!r}, got {config[key]!r})"
                 )
-        found = agents.checkpoints(self.run_dir)
+        found = rundir.checkpoints(self.run_dir)
         if not found:
             raise RunDirError(f"cannot resume {self.run_dir}: it has no checkpoints")
         skipped = []
         for steps, path in reversed(found):
             meta = path.with_suffix(".json")
             try:
-                agents.inspect_model(path)
-            except agents.AgentError as error:
+                inspect_model(path)
+            except AgentError as error:
                 skipped.append(f"skipped a checkpoint: {error}")
                 continue
             try:
@@ -310,8 +231,8 @@ class Trainer:
     # -- files -------------------------------------------------------------------------------------
     def _prepare_dir(self) -> None:
         try:
-            (self.run_dir / agents.CHECKPOINT_DIR).mkdir(parents=True, exist_ok=True)
-            runconfig.save(self.config, self.run_dir / agents.CONFIG_FILE)
+            (self.run_dir / rundir.CHECKPOINT_DIR).mkdir(parents=True, exist_ok=True)
+            runconfig.save(self.config, self.run_dir / rundir.CONFIG_FILE)
             versions_path = self.run_dir / VERSIONS_FILE
             versions = package_versions()
             if self.resume and versions_path.is_file():
@@ -349,7 +270,7 @@ class Trainer:
                     except ValueError:
                         values = []
                     if len(values) != len(EVAL_FIELDS):
-                        raise RunDirError(_bad_row(path, reader.line_num, row))
+                        raise RunDirError(rundir.bad_row(path, reader.line_num, row))
                     if values[0] <= limit:
                         rows.append(row)
 
@@ -363,7 +284,7 @@ class Trainer:
 
     def _append_evaluation(self, row: Mapping[str, Any]) -> None:
         with open(self.run_dir / EVALUATIONS_FILE, "a", newline="", encoding="utf-8") as f:
-            csv.writer(f).writerow([_csv_value(row[key]) for key in EVAL_FIELDS])
+            csv.writer(f).writerow([rundir.csv_value(row[key]) for key in EVAL_FIELDS])
 
     def wall_time(self) -> float:
         return self.wall_offset + (time.perf_counter() - self.started)
@@ -372,13 +293,13 @@ class Trainer:
     def _make_env(self):
         from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
-        from snakesim.sb3 import SnakeVecEnv
+        from snakesim.envs.sb3 import SnakeVecEnv
 
         venv = VecMonitor(SnakeVecEnv(self.config["n_envs"], **runconfig.env_kwargs(self.config)))
         if not self.config["normalize"]:
             return venv
         if self.resume_from is not None:
-            stats = agents.checkpoint_paths(self.run_dir, self.resume_from[0])[1]
+            stats = rundir.checkpoint_paths(self.run_dir, self.resume_from[0])[1]
             if stats.is_file():
                 try:
                     venv = VecNormalize.load(os.fspath(stats), venv)
@@ -395,7 +316,7 @@ class Trainer:
     def _make_model(self, venv):
         from stable_baselines3 import PPO
 
-        from snakesim.policies import policy_kwargs
+        from snakesim.runs.policies import policy_kwargs
 
         tb = os.fspath(self.run_dir / TB_DIR)
         if self.resume_from is not None:
@@ -430,7 +351,7 @@ class Trainer:
         )
 
     def save_checkpoint(self, timesteps: int, reason: str = "periodic") -> Path:
-        model_path, stats_path = agents.checkpoint_paths(self.run_dir, timesteps)
+        model_path, stats_path = rundir.checkpoint_paths(self.run_dir, timesteps)
         self._save_model(model_path, stats_path)
         meta = {"timesteps": timesteps, "wall_time": self.wall_time(), "reason": reason}
         write_atomically(
@@ -447,8 +368,8 @@ class Trainer:
             write_atomically(stats_path, normalizer.save)
 
     def _save_final(self) -> Path:
-        path = self.run_dir / agents.MODEL_FILE
-        self._save_model(path, self.run_dir / agents.VECNORMALIZE_FILE)
+        path = self.run_dir / rundir.MODEL_FILE
+        self._save_model(path, self.run_dir / rundir.VECNORMALIZE_FILE)
         return path
 
     def evaluate(self, timesteps: int) -> dict[str, Any]:
@@ -460,10 +381,10 @@ class Trainer:
                 obs = normalizer.normalize_obs(obs)
             return self.model.predict(obs, deterministic=True)[0]
 
-        episodes = agents.run_episodes(
+        episodes = run_episodes(
             act, runconfig.env_kwargs(self.config), self.config["eval_episodes"], self.config["eval_seed"]
         )
-        summary = agents.summarize(episodes)
+        summary = summarize(episodes)
         row = {**summary, "timesteps": timesteps, "wall_time": round(self.wall_time(), 3)}
         self._append_evaluation(row)
         logger = self.model.logger
@@ -480,7 +401,7 @@ class Trainer:
         if self.progress_callback is not None:
             self.progress_callback.refresh()
         elif self.verbose:
-            self.log(f"{timesteps} timesteps: {_format_eval(row)}")
+            self.log(f"{timesteps} timesteps: {format_eval(row)}")
         self.eval_seconds += time.perf_counter() - start
         if self.on_evaluation is not None:
             self.on_evaluation(dict(row))

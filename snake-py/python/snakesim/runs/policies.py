@@ -17,7 +17,7 @@ from gymnasium import spaces
 
 from snakesim import extras
 
-extras.require("sb3", "snakesim.policies (the paper's networks in Stable-Baselines3)")
+extras.require("sb3", "snakesim.runs.policies (the paper's networks in Stable-Baselines3)")
 
 import torch  # noqa: E402
 from stable_baselines3.common.preprocessing import get_flattened_obs_dim  # noqa: E402

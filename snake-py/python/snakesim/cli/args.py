@@ -1,0 +1,95 @@
+"""Argument types and option groups that several subcommands share."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import NoReturn
+
+from snakesim.cli.errors import one_line
+from snakesim.envs.config import PRESETS
+from snakesim.limits import LIMITS
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
+
+
+def int_at_least(minimum: int, maximum: int | None = None):
+    """An argparse type: an integer (underscores allowed) of at least `minimum` (and at most
+    `maximum`)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text.replace("_", ""))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"expected an integer <= {maximum}, got {value}")
+        return value
+
+    return parse
+
+
+positive_int = int_at_least(1)
+count = int_at_least(0)
+seed = int_at_least(0, LIMITS["seed"])
+threads = int_at_least(1, LIMITS["threads"])
+episodes = int_at_least(1, LIMITS["eval_episodes"])
+
+
+def seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text}")
+    return value
+
+
+def goal(text: str) -> tuple[float, float]:
+    """X,Y in metres; the env checks the range."""
+    parts = text.split(",")
+    try:
+        x, y = (float(v) for v in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y (two numbers), got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"expected finite X,Y, got {text!r}")
+    return x, y
+
+
+def agent_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "source",
+        metavar="RUN_OR_MODEL",
+        help="a run directory, a native model .safetensors, an SB3 model .zip (SB3 1.x or 2.x), or "
+        "baseline:steer / baseline:gait (hand-made controllers of the goal task)",
+    )
+    p.add_argument(
+        "--joints", type=positive_int, help="for a bare .zip: the snake's joints (default: from the model)"
+    )
+    p.add_argument("--preset", choices=PRESETS, help="for a bare .zip: the robot preset (default paper)")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the episodes (default 0)")
+    p.add_argument("--torch-threads", type=threads, default=1, help="torch CPU threads (default 1)")
+
+
+def load_agent(args: argparse.Namespace):
+    from snakesim import extras
+    from snakesim.agents.loading import load_agent
+
+    # One thread: a small MLP gains nothing from more, and they would compete with the env's threads.
+    # (Only SB3 models use torch; native models and baselines run without the sb3 extra.)
+    if extras.available("sb3"):
+        import torch
+
+        torch.set_num_threads(args.torch_threads)
+    overrides = None
+    if getattr(args, "goal", None) is not None:
+        # A fixed goal instead of the task's: e.g. the paper's (0, -10) for a goal-task agent.
+        overrides = {"goal": args.goal, "goal_distribution": None}
+    return load_agent(args.source, joints=args.joints, preset=args.preset, env_overrides=overrides)

@@ -1,0 +1,95 @@
+"""``snakesim evaluate``: the figures of an agent (or a baseline) over unseen episodes."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from snakesim.cli.args import agent_options, episodes, goal, load_agent
+from snakesim.cli.errors import UserError, check_writable
+from snakesim.files import write_atomically
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from snakesim.agents.evaluation import evaluate
+
+    if args.json is not None and args.json != "-":
+        check_writable(args.json, "--json")
+    agent = load_agent(args)
+    result = evaluate(agent, args.episodes, args.seed, deterministic=not args.stochastic)
+    report = {
+        "model": agent.path,
+        "arch": agent.arch,
+        "joints": agent.joints,
+        "preset": agent.env_kwargs["preset"],
+        "sb3_version": agent.sb3_version,
+        "trained_timesteps": agent.num_timesteps,
+        "seed": args.seed,
+        "deterministic": not args.stochastic,
+        **result,
+    }
+    text = json.dumps(report, indent=2) + "\n"
+    if args.json == "-":
+        sys.stdout.write(text)
+        return 0
+    if args.json is not None:
+        try:
+            write_atomically(args.json, lambda tmp: Path(tmp).write_text(text))
+        except OSError as error:
+            raise UserError(f"cannot write --json {args.json}: {error.strerror or error}") from None
+    steps = report["mean_steps_to_goal"]
+    seconds = report["mean_seconds_to_goal"]
+    mode = "stochastic" if args.stochastic else "deterministic"
+    trainer = {"native": "native trainer", "baseline": "hand-made controller"}.get(
+        agent.kind, f"SB3 {agent.sb3_version}"
+    )
+    label = "baseline" if agent.kind == "baseline" else f"PPO-{agent.arch}"
+    low, high = report["success_rate_ci95"]
+
+    def optional(value: float | None, unit: str = "") -> str:
+        return "-" if value is None else f"{value:.3f}{unit}"
+
+    rows = [
+        ("model", f"{agent.path} ({label}, {trainer})"),
+        ("env", f"{agent.joints} joints, preset {report['preset']}"),
+        (
+            "episodes",
+            f"{report['episodes']} (seed {args.seed}, {mode})",
+        ),
+        ("success rate", f"{report['success_rate']:.3f} (95 % interval {low:.3f}-{high:.3f})"),
+        ("mean return", f"{report['mean_return']:.1f} ± {report['std_return']:.1f}"),
+        ("mean steps to goal", "-" if steps is None else f"{steps:.1f} ({seconds:.2f} s)"),
+        ("mean speed", f"{report['mean_speed']:.3f} m/s"),
+        ("path efficiency", optional(report["mean_path_efficiency"])),
+        ("cost of transport", optional(report["mean_cost_of_transport"])),
+    ]
+    width = max(len(name) for name, _ in rows)
+    for name, value in rows:
+        print(f"{name:<{width}}  {value}")
+    if args.json is not None:
+        print(f"wrote {args.json}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "evaluate",
+        help="success rate, return, steps to goal, speed, path efficiency and cost of transport of an agent",
+    )
+    agent_options(p)
+    p.add_argument(
+        "--goal",
+        type=goal,
+        metavar="X,Y",
+        help="a fixed goal instead of the agent's task's (e.g. 0,-10: the paper's task)",
+    )
+    p.add_argument("--episodes", type=episodes, default=100, help="episodes (default 100)")
+    p.add_argument(
+        "--stochastic", action="store_true", help="sample actions instead of the deterministic policy"
+    )
+    p.add_argument(
+        "--json", metavar="FILE", help="also write the results as JSON (- : print only JSON to stdout)"
+    )
+    p.set_defaults(func=cmd_evaluate)

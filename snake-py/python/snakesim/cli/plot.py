@@ -1,0 +1,56 @@
+"""``snakesim plot``: learning curves (Figure 3) of runs and sweeps."""
+
+from __future__ import annotations
+
+import argparse
+
+from snakesim.cli.errors import UserError, check_writable
+from snakesim.files import write_atomically
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from snakesim.viewer.plots import plot_runs
+
+    out = check_writable(args.out, "--out")
+    if out.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise UserError(f"cannot write --out {out}: expected a .png, .pdf or .svg file")
+    drawn = write_atomically(
+        out,
+        lambda tmp: plot_runs(
+            args.runs,
+            tmp,
+            title=args.title,
+            metric=args.metric,
+            group=args.group,
+            spread=args.spread,
+            x=args.x,
+        ),
+    )
+    print(f"wrote {out}: " + "; ".join(label for label, _ in drawn))
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("plot", help="learning curves (Figure 3)")
+    p.add_argument(
+        "runs", nargs="+", metavar="RUN", help="run directories, evaluations.csv files or sweep folders"
+    )
+    p.add_argument("--out", required=True, help="the figure (.png, .pdf or .svg)")
+    p.add_argument("--title", help="the figure's title")
+    p.add_argument(
+        "--metric", choices=("mean_return", "success_rate", "mean_steps_to_goal"), default="mean_return"
+    )
+    p.add_argument(
+        "--group",
+        choices=("auto", "none", "all"),
+        default="auto",
+        help="auto: runs differing only in seed are one line (mean, shaded spread)",
+    )
+    p.add_argument("--spread", choices=("minmax", "std"), default="minmax", help="the shaded band of a group")
+    p.add_argument(
+        "--x",
+        choices=("timesteps", "wall_time"),
+        default="timesteps",
+        help="the x axis: timesteps, or the wall time of training (default timesteps)",
+    )
+    p.set_defaults(func=cmd_plot)

@@ -1,0 +1,93 @@
+"""The package's layout: modules grouped by concern, imports pointing one way (no circle, counting
+imports inside functions), no test hooks or private Ray APIs in shipped code, and the public names users
+write keep working."""
+
+import ast
+from pathlib import Path
+
+import snakesim
+
+PACKAGE = Path(snakesim.__file__).parent
+CONCERNS = ("envs", "runs", "agents", "sweeps", "viewer", "cli")
+#: The package's top-level modules: the public face and leaves every concern may use.
+TOP_LEVEL = {"__init__", "__main__", "extras", "files", "limits", "wrappers"}
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def modules() -> dict[str, Path]:
+    return {module_name(p): p for p in PACKAGE.rglob("*.py")}
+
+
+def known_names() -> set[str]:
+    """The package's Python modules and its compiled one (a leaf: it imports no Python module)."""
+    return set(modules()) | {"snakesim._core"}
+
+
+def imports(path: Path, known: set[str]) -> set[str]:
+    """Every snakesim module ``path`` imports, at any depth (functions included): ``from a.b import c``
+    is module a.b.c when that is a module, else a.b."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.split(".")[0] == "snakesim")
+        elif isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "snakesim":
+            for alias in node.names:
+                sub = f"{node.module}.{alias.name}"
+                found.add(sub if sub in known else node.module)
+    return {name for name in found if name in known}
+
+
+def test_no_import_circle():
+    graph = {name: imports(path, known_names()) - {name} for name, path in modules().items()}
+    graph["snakesim._core"] = set()
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(name: str) -> None:
+        state[name] = 1
+        stack.append(name)
+        for other in sorted(graph[name]):
+            if state.get(other) == 1:
+                circle = stack[stack.index(other) :] + [other]
+                raise AssertionError("import circle: " + " -> ".join(circle))
+            if other not in state:
+                visit(other)
+        stack.pop()
+        state[name] = 2
+
+    for name in sorted(graph):
+        if name not in state:
+            visit(name)
+
+
+def test_modules_are_grouped_by_concern():
+    top = {p.stem for p in PACKAGE.glob("*.py")}
+    assert top == TOP_LEVEL, f"top-level modules beyond the public face and the leaves: {top - TOP_LEVEL}"
+    for concern in CONCERNS:
+        assert (PACKAGE / concern / "__init__.py").is_file()
+    # The leaves import no concern.
+    for leaf in ("snakesim.extras", "snakesim.files", "snakesim.limits"):
+        assert imports(modules()[leaf], known_names()) <= {"snakesim._core"}, leaf
+
+
+def test_no_test_hooks_or_private_ray_in_shipped_code():
+    for path in PACKAGE.rglob("*.py"):
+        text = path.read_text()
+        assert "SNAKESIM_TEST" not in text, path
+        assert "ray._private" not in text, path
+
+
+def test_public_names_still_import():
+    import gymnasium
+    from snakesim.envs.wrappers import RerunLogger
+
+    assert snakesim.SnakeEnv.__module__ == "snakesim.envs.env"
+    assert RerunLogger.__module__ == "snakesim.envs.wrappers"
+    for env_id in ("snakesim/Snake-v0", "snakesim/SnakeGoal-v0"):
+        gymnasium.make(env_id).close()
+    from snakesim import SnakeGoalEnv, SnakeVectorEnv, __version__  # noqa: F401
+    from snakesim.agents import load_agent  # noqa: F401
