@@ -248,6 +248,8 @@ pub struct Outputs {
     pub trace: Option<PathBuf>,
     /// Rerun recording (the built-in snake).
     pub rrd: Option<PathBuf>,
+    /// Print nothing (the atlas runs many plans and prints its own line for each).
+    pub quiet: bool,
 }
 
 /// A checked run.
@@ -362,6 +364,7 @@ impl RunPlan {
                 plot: args.plot.clone(),
                 trace: args.trace.clone(),
                 rrd: args.rrd.clone(),
+                quiet: false,
             },
             seconds,
         })
@@ -440,8 +443,6 @@ pub struct RunReport {
     pub body_length: f64,
     /// The start, then every 24th physics step (0.1 s) and the last.
     pub samples: Vec<Sample>,
-    /// Base (root link) position at the start and at the end, x and y.
-    pub base: [[f64; 2]; 2],
 }
 
 fn centre_of_mass(poses: &[snake_core::Pose], masses: &[f64]) -> [f64; 2] {
@@ -605,17 +606,14 @@ pub fn execute(plan: &RunPlan) -> Result<RunReport> {
     }
     let wall = clock.elapsed().as_secs_f64();
     let body = built.sim();
-    let end_position = body.base_state()?.pose.position;
     let report = RunReport {
         mass: masses.iter().sum(),
         body_length,
         samples,
-        base: [
-            [start_position.x, start_position.y],
-            [end_position.x, end_position.y],
-        ],
     };
-    summary(plan, body, start_position, wall, &report)?;
+    if !out.quiet {
+        summary(plan, body, start_position, wall, &report)?;
+    }
     if let (Some(csv), Some(path)) = (csv, &out.trajectory) {
         csv.finish()?;
         say!("wrote {} ({steps} rows)", path.display())?;
@@ -637,7 +635,9 @@ pub fn execute(plan: &RunPlan) -> Result<RunReport> {
             ),
         };
         path.draw(file, &title)?;
-        say!("wrote {}", written.display())?;
+        if !out.quiet {
+            say!("wrote {}", written.display())?;
+        }
     }
     if let (Some(trace), Some(file)) = (trace, trace_file) {
         trace.finish()?;
