@@ -235,9 +235,14 @@ fn run_cell(
         Err(e) => {
             let text = format!("{e:#}");
             if text.contains("needs") {
-                return Ok(Cell::NotApplicable(
-                    text.trim_start_matches("invalid argument: ").to_string(),
-                ));
+                // "gait X needs pitch joints (axis ...); this robot has ..." -> "needs pitch joints".
+                let needs = text.split("needs ").nth(1).unwrap_or(&text);
+                let short = needs
+                    .split([' ', ';'])
+                    .take(2)
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                return Ok(Cell::NotApplicable(format!("needs {short}")));
             }
             return Err(e);
         }

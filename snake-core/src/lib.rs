@@ -52,7 +52,8 @@ pub use env::{
 };
 pub use error::{Error, Result};
 pub use gait::{
-    Gait, GaitChoice, GaitKind, JointRole, JointRoles, LateralUndulation, Serpenoid, SerpenoidParams,
+    Gait, GaitChoice, GaitKind, JointRole, JointRoles, LateralUndulation, Serpenoid,
+    SerpenoidParams,
 };
 pub use math::{quaternion_from_euler, StartPose};
 pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, ShapeDrawing, Simulation};

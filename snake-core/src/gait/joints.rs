@@ -142,8 +142,14 @@ mod tests {
         assert_eq!(classify(-Vector3::z(), y, 0.35), JointRole::Yaw);
         assert_eq!(classify(Vector3::x(), y, 0.35), JointRole::Pitch);
         assert_eq!(classify(Vector3::y(), y, 0.35), JointRole::Other);
-        assert_eq!(classify(Vector3::new(1.0, 0.0, 1.0), y, 0.35), JointRole::Other);
-        assert_eq!(classify(Vector3::x(), Vector3::zeros(), 0.35), JointRole::Pitch);
+        assert_eq!(
+            classify(Vector3::new(1.0, 0.0, 1.0), y, 0.35),
+            JointRole::Other
+        );
+        assert_eq!(
+            classify(Vector3::x(), Vector3::zeros(), 0.35),
+            JointRole::Pitch
+        );
     }
 
     #[test]

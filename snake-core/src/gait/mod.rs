@@ -114,7 +114,9 @@ pub fn parse_param(text: &str) -> Result<(String, f64)> {
         ))
     })?;
     if !v.is_finite() {
-        return Err(invalid(format!("gait parameter {key} must be finite, got {v}")));
+        return Err(invalid(format!(
+            "gait parameter {key} must be finite, got {v}"
+        )));
     }
     Ok((key.to_string(), v))
 }

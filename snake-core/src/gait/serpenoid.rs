@@ -265,10 +265,7 @@ impl Serpenoid {
             kind,
             GaitKind::Lateral | GaitKind::Sidewind | GaitKind::Roll | GaitKind::Turn
         );
-        let need_pitch = matches!(
-            kind,
-            GaitKind::Sidewind | GaitKind::Roll | GaitKind::Linear
-        );
+        let need_pitch = matches!(kind, GaitKind::Sidewind | GaitKind::Roll | GaitKind::Linear);
         let lacks = match (need_yaw && yaw == 0, need_pitch && pitch == 0) {
             (true, true) => Some("yaw and pitch joints"),
             (true, false) => Some("yaw joints (axis along z at rest)"),
@@ -364,9 +361,15 @@ mod tests {
     fn parameters_are_checked_by_name() {
         let roles = yaw_pitch(6);
         let bad = |k: &str, v: f64| {
-            Serpenoid::new(GaitKind::Sidewind, &roles, &[(k.into(), v)], 0.0, 1.0 / 240.0)
-                .unwrap_err()
-                .to_string()
+            Serpenoid::new(
+                GaitKind::Sidewind,
+                &roles,
+                &[(k.into(), v)],
+                0.0,
+                1.0 / 240.0,
+            )
+            .unwrap_err()
+            .to_string()
         };
         assert!(bad("amplitude_yaw", 9.0).contains("amplitude_yaw"));
         assert!(bad("period", 0.0).contains("period"));
