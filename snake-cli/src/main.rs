@@ -1,5 +1,6 @@
 //! `snake-cli`: run the snake's gait, run the environment, benchmark.
 
+mod atlas;
 mod bench;
 mod env_run;
 mod output;
@@ -28,6 +29,9 @@ enum Command {
     /// Run a gait (or joint targets) on the built-in snake or a URDF robot and report its motion;
     /// optionally write the trajectory (CSV), a plot (PNG) and a Rerun recording (.rrd).
     Run(run::RunArgs),
+    /// Run every robot x gait x ground briefly and write the gait atlas (docs/gaits.md and its path
+    /// pictures).
+    Atlas(atlas::AtlasArgs),
     /// Run episodes of the RL environment with a fixed policy (random, zero or the gait).
     Env(env_run::EnvArgs),
     /// Measure physics steps per second (and pybullet's, when its reference environment exists).
@@ -45,6 +49,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Run(args) => run::run(&args).map(|()| ExitCode::SUCCESS),
+        Command::Atlas(args) => atlas::atlas(&args).map(|()| ExitCode::SUCCESS),
         Command::Env(args) => env_run::run(&args).map(|()| ExitCode::SUCCESS),
         Command::Bench(args) => bench::bench(&args).map(|()| ExitCode::SUCCESS),
         Command::Train(args) => train::run(

@@ -13,8 +13,8 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::urdf::Geometry;
 use snake_core::{
-    Gait, GaitKind, InertiaSource, LateralUndulation, Preset, Robot, RobotGait, RobotSpec,
-    Simulation, Snake, SnakeConfig, StartPose,
+    Gait, GaitChoice, GaitKind, InertiaSource, JointRoles, LateralUndulation, Preset, Robot,
+    RobotGait, RobotSpec, Simulation, Snake, SnakeConfig, StartPose,
 };
 
 use crate::output::{check_distinct, say, OutputFile};
@@ -34,10 +34,16 @@ pub struct RunArgs {
     /// YAML robot file around one (anisotropic friction, motor gains, start pose; see robots/).
     #[arg(long)]
     pub robot: Option<PathBuf>,
-    /// Gait: sine (pybullet's snake.py lateral undulation), on every actuated joint (URDF effort > 0)
-    /// in joint order; a robot file may set the wave's parameters.
+    /// Gait: sine (pybullet's snake.py lateral undulation, on every actuated joint in joint order; a
+    /// robot file may set the wave's parameters), or one of the library over the robot's yaw and pitch
+    /// joints: lateral, sidewind, roll, linear, turn (docs/gaits.md).
     #[arg(long, default_value = "sine")]
     pub gait: GaitKind,
+    /// A gait parameter KEY=VALUE, repeatable, over the gait's defaults. sine: amplitude, period,
+    /// wave_length, segment_length, ramp_segments; the library: amplitude_yaw, amplitude_pitch,
+    /// spatial_yaw, spatial_pitch, period, phase, offset_yaw, offset_pitch, ramp.
+    #[arg(long = "gait-param", value_name = "KEY=VALUE", value_parser = parse_gait_param, conflicts_with = "targets")]
+    pub gait_params: Vec<(String, f64)>,
     /// Joint targets from a CSV instead of the gait (--robot only): header step,<joint names> (any
     /// order), one row per 1/240 s physics step, applied before that step; the run lasts as many steps
     /// as the file has rows.
@@ -95,6 +101,10 @@ fn parse_numbers<const N: usize>(text: &str, what: &str) -> Result<[f64; N], Str
         .map_err(|v: Vec<f64>| format!("'{text}' has {} values; expected {what}", v.len()))
 }
 
+fn parse_gait_param(text: &str) -> Result<(String, f64), String> {
+    snake_core::gait::parse_param(text).map_err(|e| e.to_string())
+}
+
 fn parse_start(text: &str) -> Result<StartPose, String> {
     let [x, y, z, yaw] = parse_numbers::<4>(text, "X,Y,Z,YAW")?;
     let pose = StartPose { x, y, z, yaw };
@@ -131,6 +141,30 @@ impl BodyPlan {
         match self {
             BodyPlan::Cubes { config, .. } => config.joints,
             BodyPlan::Robot(spec) => spec.urdf.movable_joints().len(),
+        }
+    }
+
+    /// Which joints a gait of the library bends sideways and which up and down.
+    pub fn joint_roles(&self) -> JointRoles {
+        match self {
+            BodyPlan::Cubes { config, .. } => JointRoles::all_yaw(config.joints),
+            BodyPlan::Robot(spec) => JointRoles::of_urdf(&spec.urdf),
+        }
+    }
+
+    /// Mass of each body part, kg, in [`Simulation::body_poses`] order (pybullet's 1 kg for a URDF
+    /// link without `<inertial>`).
+    pub fn masses(&self) -> Vec<f64> {
+        match self {
+            BodyPlan::Cubes { config, .. } => std::iter::once(config.base_mass)
+                .chain(std::iter::repeat_n(config.link_mass, config.joints))
+                .collect(),
+            BodyPlan::Robot(spec) => spec
+                .urdf
+                .links
+                .iter()
+                .map(|l| l.inertial.as_ref().map_or(1.0, |i| i.mass))
+                .collect(),
         }
     }
 
@@ -193,7 +227,7 @@ impl Built {
 /// How the joints are driven.
 pub enum Drive {
     /// A gait, stepped once per physics step.
-    Gait(LateralUndulation),
+    Gait(GaitChoice),
     /// Targets from a file, one row per physics step.
     Targets {
         /// The file.
@@ -214,6 +248,8 @@ pub struct Outputs {
     pub trace: Option<PathBuf>,
     /// Rerun recording (the built-in snake).
     pub rrd: Option<PathBuf>,
+    /// Print nothing (the atlas runs many plans and prints its own line for each).
+    pub quiet: bool,
 }
 
 /// A checked run.
@@ -292,11 +328,14 @@ impl RunPlan {
                     BodyPlan::Robot(spec) => spec.gait.clone().unwrap_or_default(),
                     BodyPlan::Cubes { .. } => LateralUndulation::default(),
                 };
-                let mut gait = match args.gait {
-                    GaitKind::Sine => base.with_steering(args.steer),
-                };
-                gait.dt = config_dt;
-                gait.validate()?;
+                let gait = GaitChoice::new(
+                    args.gait,
+                    &args.gait_params,
+                    args.steer,
+                    &body.joint_roles(),
+                    base,
+                    config_dt,
+                )?;
                 let steps = (args.seconds / config_dt).round() as u64;
                 if steps == 0 {
                     bail!(
@@ -325,6 +364,7 @@ impl RunPlan {
                 plot: args.plot.clone(),
                 trace: args.trace.clone(),
                 rrd: args.rrd.clone(),
+                quiet: false,
             },
             seconds,
         })
@@ -377,11 +417,46 @@ impl RunPlan {
 /// Runs the gait (or the targets) and prints a summary.
 pub fn run(args: &RunArgs) -> Result<()> {
     let plan = RunPlan::from_args(args)?;
-    execute(&plan)
+    execute(&plan).map(|_| ())
 }
 
-/// Runs a checked plan.
-pub fn execute(plan: &RunPlan) -> Result<()> {
+/// One moment of a run, for speeds and the cost of transport.
+#[derive(Debug, Clone, Copy)]
+pub struct Sample {
+    /// Simulated seconds.
+    pub time: f64,
+    /// Centre of mass of the body parts (mass-weighted centres), x and y, metres.
+    pub com: [f64; 2],
+    /// Mechanical work of the motors so far, the sum over steps and joints of |tau * qdot| * dt, J.
+    pub work: f64,
+    /// Direction of the body axis, from the tail (the body part farthest from the base at the start)
+    /// to the base, radians counter-clockwise from +x, in (-pi, pi].
+    pub axis: f64,
+}
+
+/// What a run measured.
+#[derive(Debug, Clone)]
+pub struct RunReport {
+    /// Total mass, kg.
+    pub mass: f64,
+    /// Body length: the largest distance between two body parts' centres at the start, metres.
+    pub body_length: f64,
+    /// The start, then every 24th physics step (0.1 s) and the last.
+    pub samples: Vec<Sample>,
+}
+
+fn centre_of_mass(poses: &[snake_core::Pose], masses: &[f64]) -> [f64; 2] {
+    let total: f64 = masses.iter().sum();
+    let (mut x, mut y) = (0.0, 0.0);
+    for (p, m) in poses.iter().zip(masses) {
+        x += p.position.x * m;
+        y += p.position.y * m;
+    }
+    [x / total, y / total]
+}
+
+/// Runs a checked plan and returns what it measured.
+pub fn execute(plan: &RunPlan) -> Result<RunReport> {
     let out = &plan.outputs;
     let joints = plan.body.joints();
     // Check the outputs first: a bad path or format fails before any simulation time is spent, and
@@ -441,15 +516,47 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
         .transpose()?;
 
     let start_position = built.sim().base_state()?.pose.position;
+    let masses = plan.body.masses();
+    let start_poses = built.sim().body_poses()?;
+    let body_length = start_poses
+        .iter()
+        .flat_map(|a| {
+            start_poses
+                .iter()
+                .map(move |b| (a.position - b.position).norm())
+        })
+        .fold(0.0, f64::max);
+    let tail = start_poses
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (k, (p.position - start_poses[0].position).norm()))
+        .fold((0, 0.0), |best, c| if c.1 > best.1 { c } else { best })
+        .0;
+    let axis = |poses: &[snake_core::Pose]| {
+        let d = poses[0].position - poses[tail].position;
+        d.y.atan2(d.x)
+    };
+    let mut samples = vec![Sample {
+        time: 0.0,
+        com: centre_of_mass(&start_poses, &masses),
+        work: 0.0,
+        axis: axis(&start_poses),
+    }];
+    let mut work = 0.0;
+    let (mut velocities, mut torques) = (vec![0.0; joints], vec![0.0; joints]);
     let mut path = PathPlot::new(plan.body.draw_half_extent());
     path.sample(built.sim())?;
     let steps = plan.steps;
     let snapshot_every = (steps / 4).max(1);
     let mut targets = vec![0.0; joints];
-    // The gait's wave runs over the actuated joints; passive ones (effort 0) keep target 0.
+    // sine's wave runs over the actuated joints; passive ones (effort 0) keep target 0. The library's
+    // gaits set every movable joint by its role.
     let mut gait: Option<Box<dyn Gait>> = match (&plan.drive, &plan.body) {
-        (Drive::Gait(g), BodyPlan::Cubes { .. }) => Some(Box::new(g.clone())),
-        (Drive::Gait(g), BodyPlan::Robot(spec)) => Some(Box::new(RobotGait::new(g.clone(), spec))),
+        (Drive::Gait(GaitChoice::Sine(g)), BodyPlan::Cubes { .. }) => Some(Box::new(g.clone())),
+        (Drive::Gait(GaitChoice::Sine(g)), BodyPlan::Robot(spec)) => {
+            Some(Box::new(RobotGait::new(g.clone(), spec)))
+        }
+        (Drive::Gait(GaitChoice::Library(g)), _) => Some(Box::new(g.clone())),
         (Drive::Targets { .. }, _) => None,
     };
     let clock = Instant::now();
@@ -466,6 +573,17 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
             body.set_targets(&targets)?;
         }
         body.step().with_context(|| format!("at step {step}"))?;
+        if joints > 0 {
+            built
+                .sim()
+                .read_joint_states(&mut [], &mut velocities, &mut torques)?;
+            let power: f64 = velocities
+                .iter()
+                .zip(&torques)
+                .map(|(v, t)| (v * t).abs())
+                .sum();
+            work += power * built.sim().dt();
+        }
         if let Some(csv) = csv.as_mut() {
             csv.record(built.sim())?;
         }
@@ -474,6 +592,13 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
         }
         if step % 24 == 0 || step == steps {
             path.trace(built.sim())?;
+            let poses = built.sim().body_poses()?;
+            samples.push(Sample {
+                time: built.sim().time(),
+                com: centre_of_mass(&poses, &masses),
+                work,
+                axis: axis(&poses),
+            });
         }
         if step % snapshot_every == 0 {
             path.sample(built.sim())?;
@@ -481,7 +606,14 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
     }
     let wall = clock.elapsed().as_secs_f64();
     let body = built.sim();
-    summary(plan, body, start_position, wall)?;
+    let report = RunReport {
+        mass: masses.iter().sum(),
+        body_length,
+        samples,
+    };
+    if !out.quiet {
+        summary(plan, body, start_position, wall, &report)?;
+    }
     if let (Some(csv), Some(path)) = (csv, &out.trajectory) {
         csv.finish()?;
         say!("wrote {} ({steps} rows)", path.display())?;
@@ -503,7 +635,9 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
             ),
         };
         path.draw(file, &title)?;
-        say!("wrote {}", written.display())?;
+        if !out.quiet {
+            say!("wrote {}", written.display())?;
+        }
     }
     if let (Some(trace), Some(file)) = (trace, trace_file) {
         trace.finish()?;
@@ -521,7 +655,7 @@ pub fn execute(plan: &RunPlan) -> Result<()> {
             )?;
         }
     }
-    Ok(())
+    Ok(report)
 }
 
 fn summary(
@@ -529,6 +663,7 @@ fn summary(
     body: &dyn Simulation,
     start_position: nalgebra::Vector3<f64>,
     wall: f64,
+    report: &RunReport,
 ) -> Result<()> {
     let steps = plan.steps;
     let dt = SnakeConfig::default().dt;
@@ -572,6 +707,15 @@ fn summary(
         end.position.y
     )?;
     say!("mean speed {:.3} m/s", distance / body.time())?;
+    if let (Some(first), Some(last)) = (report.samples.first(), report.samples.last()) {
+        let (dx, dy) = (last.com[0] - first.com[0], last.com[1] - first.com[1]);
+        let d = dx.hypot(dy);
+        say!(
+            "centre of mass moved {d:.3} m ({dx:+.3}, {dy:+.3}); motor work {:.3} J; cost of transport {}",
+            last.work,
+            cost_of_transport(last.work, report.mass, d)
+        )?;
+    }
     say!(
         "heading    travel direction {:+.1} deg (counter-clockwise from +x); head yaw {:+.1} deg",
         moved.y.atan2(moved.x).to_degrees(),
@@ -584,4 +728,15 @@ fn summary(
         end.position.z,
         end.yaw()
     )
+}
+
+/// Cost of transport: mechanical work over weight times distance, `W / (m g d)` (dimensionless), as
+/// text; "-" when the body did not move.
+pub fn cost_of_transport(work: f64, mass: f64, distance: f64) -> String {
+    let g = -SnakeConfig::default().gravity;
+    if distance > 1e-9 && mass > 0.0 {
+        format!("{:.3}", work / (mass * g * distance))
+    } else {
+        "-".to_string()
+    }
 }

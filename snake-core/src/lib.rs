@@ -8,7 +8,8 @@
 //! - [`config`]: [`SnakeConfig`], every physical parameter, and the [`Preset`]s `paper` (every cube
 //!   0.06 kg) and `snakebot-gym` (the paper's code: links 1.0 kg).
 //! - [`snake`]: [`Snake`], the robot on its ground plane.
-//! - [`gait`]: the [`Gait`] trait and [`LateralUndulation`], pybullet's snake.py wave.
+//! - [`gait`]: the [`Gait`] trait, [`LateralUndulation`] (pybullet's snake.py wave) and the gait
+//!   library ([`Serpenoid`]: lateral undulation, sidewinding, rolling, linear progression, turning).
 //! - [`env`](mod@env): [`SnakeEnv`], the paper's reinforcement-learning environment (Gymnasium-style
 //!   `reset`/`step`), configured by [`EnvConfig`].
 //! - [`vec_env`]: [`VecSnakeEnv`], many envs stepped together across threads with automatic resets.
@@ -50,7 +51,10 @@ pub use env::{
     StepOutcome, StepResult, Task,
 };
 pub use error::{Error, Result};
-pub use gait::{Gait, GaitKind, LateralUndulation};
+pub use gait::{
+    Gait, GaitChoice, GaitKind, JointRole, JointRoles, LateralUndulation, Serpenoid,
+    SerpenoidParams,
+};
 pub use math::{quaternion_from_euler, StartPose};
 pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, ShapeDrawing, Simulation};
 pub use snake::Snake;

@@ -70,6 +70,30 @@ pub const MAX_URDF_BYTES: u64 = 16 << 20;
 /// Most rows of a joint-targets CSV (`snake-cli run --targets`): an hour of 1/240 s steps.
 pub const MAX_TARGET_ROWS: usize = 864_000;
 
+/// Range of a library gait's wave amplitudes, radians: up to a right angle, the yaw-pitch robot's joint
+/// range (a larger target only presses the joint against its limit).
+pub const GAIT_AMPLITUDE: (f64, f64) = (0.0, std::f64::consts::FRAC_PI_2);
+
+/// Range of a library gait's spatial frequency, radians per module: beyond pi a wave samples its own
+/// alias (a wave of -2 pi + s per module is the same joint angles as s).
+pub const GAIT_SPATIAL: (f64, f64) = (-std::f64::consts::PI, std::f64::consts::PI);
+
+/// Range of a library gait's period, seconds: from 12 physics steps per cycle (at 1/240 s) to ten
+/// minutes.
+pub const GAIT_PERIOD: (f64, f64) = (0.05, 600.0);
+
+/// Range of a library gait's phase between its pitch and yaw waves, radians (one turn each way).
+pub const GAIT_PHASE: (f64, f64) = (-std::f64::consts::TAU, std::f64::consts::TAU);
+
+/// Range of a library gait's pitch wave cycles per gait cycle.
+pub const GAIT_PITCH_RATE: (f64, f64) = (0.0, 8.0);
+
+/// Range of a library gait's constant yaw or pitch offset (steering included), radians.
+pub const GAIT_OFFSET: (f64, f64) = (-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);
+
+/// Range of a library gait's start-up ramp, seconds.
+pub const GAIT_RAMP: (f64, f64) = (0.0, 600.0);
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {

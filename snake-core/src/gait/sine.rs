@@ -1,17 +1,10 @@
-//! Open-loop gaits: joint target angles as a function of time.
+//! `sine`: pybullet's `examples/snake.py` wave, kept bit for bit (the paper's gait and the parity
+//! tests' drive).
 
 use serde::{Deserialize, Serialize};
 
+use super::Gait;
 use crate::error::{invalid, Result};
-
-/// A source of joint targets, called once per physics step.
-pub trait Gait {
-    /// Writes the targets for the current step into `targets` (one per joint) and advances the gait
-    /// by one step.
-    fn next_targets(&mut self, targets: &mut [f64]);
-    /// Returns the gait to its initial phase.
-    fn reset(&mut self);
-}
 
 /// Lateral undulation as pybullet's `examples/snake.py` drives it: a sine wave of joint angles that
 /// travels from the head (the base) to the tail.
@@ -46,6 +39,15 @@ pub struct LateralUndulation {
     #[serde(skip)]
     scale: f64,
 }
+
+/// The `--gait-param` keys of `sine`.
+pub const PARAM_KEYS: [&str; 5] = [
+    "amplitude",
+    "period",
+    "wave_length",
+    "segment_length",
+    "ramp_segments",
+];
 
 impl Default for LateralUndulation {
     fn default() -> Self {
@@ -98,6 +100,26 @@ impl LateralUndulation {
         Ok(())
     }
 
+    /// Sets one parameter by its `--gait-param` key ([`PARAM_KEYS`]); steering and `dt` come from their
+    /// own flags.
+    pub fn set(&mut self, key: &str, value: f64) -> Result<()> {
+        let field = match key {
+            "amplitude" => &mut self.amplitude,
+            "period" => &mut self.period,
+            "wave_length" => &mut self.wave_length,
+            "segment_length" => &mut self.segment_length,
+            "ramp_segments" => &mut self.ramp_segments,
+            _ => {
+                return Err(invalid(format!(
+                    "unknown gait parameter '{key}' for gait sine (expected one of: {})",
+                    PARAM_KEYS.join(", ")
+                )))
+            }
+        };
+        *field = value;
+        Ok(())
+    }
+
     /// The default wave with a steering offset (radians, > -1).
     pub fn with_steering(mut self, steering: f64) -> Self {
         self.steering = steering;
@@ -140,32 +162,6 @@ impl Gait for LateralUndulation {
     fn reset(&mut self) {
         self.front = 0.0;
         self.scale = 1.0;
-    }
-}
-
-/// The gaits the CLI offers by name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum GaitKind {
-    /// [`LateralUndulation`] (`sine`).
-    Sine,
-}
-
-impl std::fmt::Display for GaitKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            GaitKind::Sine => "sine",
-        })
-    }
-}
-
-impl std::str::FromStr for GaitKind {
-    type Err = crate::Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "sine" => Ok(GaitKind::Sine),
-            _ => Err(invalid(format!("unknown gait '{s}' (expected: sine)"))),
-        }
     }
 }
 

@@ -1,0 +1,247 @@
+//! The gait library through `snake-cli run`: each gait moves the yaw-pitch robot the way its name
+//! says, and bad gait input is one line, a non-zero exit and no file.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn snake_cli(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_snake-cli"))
+        .args(args)
+        .output()
+        .expect("snake-cli starts")
+}
+
+fn robot(name: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../robots")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// Runs a gait and returns the centre of mass's displacement (dx, dy) from the summary.
+fn displacement(robot_file: &str, gait: &str, seconds: &str) -> (f64, f64) {
+    let out = snake_cli(&[
+        "run",
+        "--robot",
+        robot_file,
+        "--gait",
+        gait,
+        "--seconds",
+        seconds,
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{gait}: {text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("centre of mass moved"))
+        .unwrap_or_else(|| panic!("no centre-of-mass line in {text}"));
+    let inside = &line[line.find('(').unwrap() + 1..line.find(')').unwrap()];
+    let v: Vec<f64> = inside
+        .split(',')
+        .map(|x| x.trim().parse().unwrap())
+        .collect();
+    (v[0], v[1])
+}
+
+// yaw-pitch-16 lies along +y from its head at the origin: along the body is y (head first is -y),
+// across it is x.
+
+#[test]
+fn sidewind_moves_the_yaw_pitch_robot_sideways() {
+    let (dx, dy) = displacement(&robot("yaw-pitch-16.yaml"), "sidewind", "6");
+    assert!(
+        dx.abs() > 0.5,
+        "sidewinding moved only {dx:.3} m across the body"
+    );
+    assert!(
+        dx.abs() > 2.5 * dy.abs(),
+        "not sideways: ({dx:.3}, {dy:.3})"
+    );
+}
+
+#[test]
+fn lateral_moves_the_yaw_pitch_robot_forwards() {
+    let (dx, dy) = displacement(&robot("yaw-pitch-16.yaml"), "lateral", "6");
+    assert!(
+        dy < -0.4,
+        "lateral undulation moved only {dy:.3} m head first"
+    );
+    assert!(
+        dy.abs() > 4.0 * dx.abs(),
+        "not along the body: ({dx:.3}, {dy:.3})"
+    );
+}
+
+#[test]
+fn linear_and_roll_move_the_yaw_pitch_robot_as_named() {
+    let (dx, dy) = displacement(&robot("yaw-pitch-16.yaml"), "linear", "6");
+    assert!(
+        dy < -0.3 && dy.abs() > 4.0 * dx.abs(),
+        "linear: ({dx:.3}, {dy:.3})"
+    );
+    let (dx, dy) = displacement(&robot("yaw-pitch-16.yaml"), "roll", "6");
+    assert!(
+        dx.abs() > 0.3 && dx.abs() > 2.0 * dy.abs(),
+        "roll: ({dx:.3}, {dy:.3})"
+    );
+}
+
+#[test]
+fn lateral_and_turn_run_on_the_cube_snake() {
+    let (dx, dy) = displacement(&robot("paper-cubes-5.yaml"), "lateral", "4");
+    assert!(
+        dy < -1.0 && dy.abs() > 4.0 * dx.abs(),
+        "lateral: ({dx:.3}, {dy:.3})"
+    );
+    let out = snake_cli(&["run", "--joints", "6", "--gait", "turn", "--seconds", "1"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn bad_gait_input_is_one_line_and_writes_nothing() {
+    let dir = std::env::temp_dir().join(format!("snake-cli-gaits-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("t.csv");
+    let csv = csv.to_str().unwrap();
+    let yp = robot("yaw-pitch-16.yaml");
+    let cubes = robot("paper-cubes-5.yaml");
+    let cases: &[(&[&str], &str)] = &[
+        (&["--gait", "slither"], "unknown gait 'slither'"),
+        (&["--gait", "sidewind"], "needs pitch joints"),
+        (
+            &["--gait", "linear", "--robot", &cubes],
+            "needs pitch joints",
+        ),
+        (&["--gait", "roll", "--robot", &cubes], "needs pitch joints"),
+        (
+            &[
+                "--robot",
+                &yp,
+                "--gait",
+                "sidewind",
+                "--gait-param",
+                "wobble=1",
+            ],
+            "unknown gait parameter 'wobble'",
+        ),
+        (
+            &[
+                "--robot",
+                &yp,
+                "--gait",
+                "lateral",
+                "--gait-param",
+                "period",
+            ],
+            "not KEY=VALUE",
+        ),
+        (
+            &[
+                "--robot",
+                &yp,
+                "--gait",
+                "lateral",
+                "--gait-param",
+                "period=fast",
+            ],
+            "not a number",
+        ),
+        (
+            &[
+                "--robot",
+                &yp,
+                "--gait",
+                "lateral",
+                "--gait-param",
+                "period=inf",
+            ],
+            "must be finite",
+        ),
+        (
+            &[
+                "--robot",
+                &yp,
+                "--gait",
+                "lateral",
+                "--gait-param",
+                "period=0",
+            ],
+            "period must be in",
+        ),
+        (
+            &[
+                "--robot",
+                &yp,
+                "--gait",
+                "roll",
+                "--gait-param",
+                "amplitude_yaw=3",
+            ],
+            "amplitude_yaw must be in",
+        ),
+        (
+            &["--robot", &yp, "--gait", "turn", "--steer", "5"],
+            "offset_yaw must be in",
+        ),
+        (
+            &["--gait", "sine", "--gait-param", "amplitude_yaw=0.3"],
+            "unknown gait parameter 'amplitude_yaw' for gait sine",
+        ),
+        (&["--gait", "sine", "--gait-param", "period=-1"], "period"),
+    ];
+    for (args, expected) in cases {
+        let mut all = vec!["run", "--seconds", "0.1", "--output", csv];
+        all.extend_from_slice(args);
+        let out = snake_cli(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        // The first line is the error and names the problem (clap adds a usage hint below its own).
+        let first = err.lines().next().unwrap_or("");
+        assert!(first.starts_with("error:"), "{args:?}: {err}");
+        assert!(
+            first.contains(expected),
+            "{args:?}: expected '{expected}' in: {first}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(!std::path::Path::new(csv).exists(), "{args:?} wrote {csv}");
+    }
+}
+
+/// The joint roles of the robot files, read from their axes at rest.
+#[test]
+fn robot_files_joint_roles() {
+    use snake_core::{JointRole, JointRoles, RobotSpec};
+    let roles = |name: &str| {
+        let spec = RobotSpec::load(std::path::Path::new(&robot(name))).unwrap();
+        JointRoles::of_urdf(&spec.urdf)
+    };
+    let yp = roles("yaw-pitch-16.yaml");
+    assert_eq!(yp.roles.len(), 15);
+    for (k, r) in yp.roles.iter().enumerate() {
+        let expected = if k % 2 == 0 {
+            JointRole::Yaw
+        } else {
+            JointRole::Pitch
+        };
+        assert_eq!(*r, expected, "joint {k}");
+    }
+    let wheeled = roles("wheeled-8.yaml");
+    assert_eq!(wheeled.count(JointRole::Yaw), 7);
+    assert_eq!(wheeled.count(JointRole::Pitch), 0);
+    assert_eq!(
+        wheeled.count(JointRole::Passive),
+        16,
+        "the wheels have no motor"
+    );
+    let cubes = roles("paper-cubes-5.yaml");
+    assert_eq!(cubes.roles, vec![JointRole::Yaw; 5]);
+}

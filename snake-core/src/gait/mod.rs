@@ -1,0 +1,169 @@
+//! Open-loop gaits: joint target angles as a function of time.
+//!
+//! - [`sine`]: [`LateralUndulation`], pybullet's `examples/snake.py` wave, bit for bit (`--gait sine`,
+//!   the paper's gait).
+//! - [`serpenoid`]: the gait library, Tesch et al.'s compound serpenoid over a robot's yaw and pitch
+//!   joints (`lateral`, `sidewind`, `roll`, `linear`, `turn`).
+//! - [`joints`]: which joints are yaw and which pitch, from the joint axes at rest.
+//!
+//! [`GaitChoice::new`] makes any of them by name with `KEY=VALUE` parameters, as `snake-cli run --gait
+//! NAME --gait-param KEY=VALUE` does.
+
+pub mod joints;
+pub mod serpenoid;
+pub mod sine;
+
+pub use joints::{JointRole, JointRoles};
+pub use serpenoid::{Serpenoid, SerpenoidParams};
+pub use sine::LateralUndulation;
+
+use crate::error::{invalid, Result};
+
+/// A source of joint targets, called once per physics step.
+pub trait Gait {
+    /// Writes the targets for the current step into `targets` (one per joint) and advances the gait
+    /// by one step.
+    fn next_targets(&mut self, targets: &mut [f64]);
+    /// Returns the gait to its initial phase.
+    fn reset(&mut self);
+}
+
+/// The gaits the CLI offers by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GaitKind {
+    /// [`LateralUndulation`] (`sine`).
+    Sine,
+    /// Serpenoid lateral undulation (`lateral`).
+    Lateral,
+    /// Sidewinding (`sidewind`).
+    Sidewind,
+    /// Rolling (`roll`).
+    Roll,
+    /// Linear progression, a vertical travelling wave (`linear`).
+    Linear,
+    /// Turning in place (`turn`).
+    Turn,
+}
+
+impl GaitKind {
+    /// Every gait, in the order help and the atlas list them.
+    pub const ALL: [GaitKind; 6] = [
+        GaitKind::Sine,
+        GaitKind::Lateral,
+        GaitKind::Sidewind,
+        GaitKind::Roll,
+        GaitKind::Linear,
+        GaitKind::Turn,
+    ];
+
+    /// The gait's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            GaitKind::Sine => "sine",
+            GaitKind::Lateral => "lateral",
+            GaitKind::Sidewind => "sidewind",
+            GaitKind::Roll => "roll",
+            GaitKind::Linear => "linear",
+            GaitKind::Turn => "turn",
+        }
+    }
+
+    /// The `--gait-param` keys this gait takes.
+    pub fn param_keys(self) -> &'static [&'static str] {
+        match self {
+            GaitKind::Sine => &sine::PARAM_KEYS,
+            _ => &serpenoid::PARAM_KEYS,
+        }
+    }
+}
+
+impl std::fmt::Display for GaitKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for GaitKind {
+    type Err = crate::Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        GaitKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = GaitKind::ALL.iter().map(|k| k.name()).collect();
+                invalid(format!(
+                    "unknown gait '{s}' (expected one of: {})",
+                    names.join(", ")
+                ))
+            })
+    }
+}
+
+/// Parses one `KEY=VALUE` gait parameter (the value a finite number; its range is checked with the
+/// gait).
+pub fn parse_param(text: &str) -> Result<(String, f64)> {
+    let (key, value) = text
+        .split_once('=')
+        .ok_or_else(|| invalid(format!("gait parameter '{text}' is not KEY=VALUE")))?;
+    let key = key.trim();
+    let v: f64 = value.trim().parse().map_err(|_| {
+        invalid(format!(
+            "gait parameter {key}: '{}' is not a number",
+            value.trim()
+        ))
+    })?;
+    if !v.is_finite() {
+        return Err(invalid(format!(
+            "gait parameter {key} must be finite, got {v}"
+        )));
+    }
+    Ok((key.to_string(), v))
+}
+
+/// A gait made by name: `sine` (on the robot's actuated joints, as before) or one of the library.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(untagged)]
+pub enum GaitChoice {
+    /// pybullet's snake.py wave; on a URDF robot it runs over the actuated joints in order
+    /// ([`crate::RobotGait`]).
+    Sine(LateralUndulation),
+    /// A gait of the library, over all movable joints.
+    Library(Serpenoid),
+}
+
+impl GaitChoice {
+    /// `kind` with `params` (`KEY=VALUE` pairs, applied in order over the gait's defaults) and `steer`,
+    /// on a robot with `roles`; `sine` starts from `sine_base` (a robot file's wave, or snake.py's).
+    pub fn new(
+        kind: GaitKind,
+        params: &[(String, f64)],
+        steer: f64,
+        roles: &JointRoles,
+        sine_base: LateralUndulation,
+        dt: f64,
+    ) -> Result<Self> {
+        match kind {
+            GaitKind::Sine => {
+                let mut g = sine_base.with_steering(steer);
+                for (key, value) in params {
+                    g.set(key, *value)?;
+                }
+                g.dt = dt;
+                g.validate()?;
+                Ok(GaitChoice::Sine(g))
+            }
+            _ => Ok(GaitChoice::Library(Serpenoid::new(
+                kind, roles, params, steer, dt,
+            )?)),
+        }
+    }
+
+    /// Seconds per gait cycle.
+    pub fn period(&self) -> f64 {
+        match self {
+            GaitChoice::Sine(g) => g.period,
+            GaitChoice::Library(g) => g.params.period,
+        }
+    }
+}
