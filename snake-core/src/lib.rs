@@ -11,6 +11,8 @@
 //! - [`gait`]: the [`Gait`] trait and [`LateralUndulation`], pybullet's snake.py wave.
 //! - [`env`](mod@env): [`SnakeEnv`], the paper's reinforcement-learning environment (Gymnasium-style
 //!   `reset`/`step`), configured by [`EnvConfig`].
+//! - [`world_file`]: [`WorldSpec`], the ground (plane, slope, heightfield) and static obstacles of a
+//!   world file.
 //! - [`vec_env`]: [`VecSnakeEnv`], many envs stepped together across threads with automatic resets.
 //!
 //! ```
@@ -42,6 +44,7 @@ pub mod snake;
 pub mod urdf;
 pub mod vec_env;
 pub mod world;
+pub mod world_file;
 
 pub use config::{Preset, SnakeConfig};
 pub use env::{
@@ -57,5 +60,7 @@ pub use snake::Snake;
 pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};
 pub use world::{
-    BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose, World,
+    BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose,
+    StaticShape, World,
 };
+pub use world_file::{WorldRef, WorldSpec};
