@@ -907,6 +907,76 @@ impl WorldSpec {
     }
 }
 
+/// The ground as a viewer draws it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum GroundDrawing {
+    /// A plane through the origin with this orientation (x, y, z, w): z = 0 turned by it.
+    Plane {
+        /// The ground body's orientation.
+        orientation: [f64; 4],
+    },
+    /// A grid of `rows` points along x by `columns` along y; `points` holds x, y, z of each point,
+    /// line by line, where Bullet placed them (centred, see [`Heightfield::point`]).
+    Heightfield {
+        /// Points per grid line.
+        rows: usize,
+        /// Grid lines.
+        columns: usize,
+        /// x, y, z per point.
+        points: Vec<f64>,
+    },
+}
+
+/// A world as a viewer draws it (the metadata of a run's trace, for Rerun).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WorldDrawing {
+    /// The ground.
+    pub ground: GroundDrawing,
+    /// Each obstacle: box (full extents), sphere (radius, 0, 0) or cylinder (radius, height, 0), with
+    /// its pose, as a robot's shapes are described.
+    pub obstacles: Vec<crate::robot::ShapeDrawing>,
+}
+
+impl WorldSpec {
+    /// What a viewer needs to draw the world.
+    pub fn drawing(&self) -> WorldDrawing {
+        let ground = match &self.ground {
+            Ground::Heightfield(h) => GroundDrawing::Heightfield {
+                rows: h.rows,
+                columns: h.columns,
+                points: (0..h.columns)
+                    .flat_map(|y| (0..h.rows).flat_map(move |x| h.point(x, y)))
+                    .collect(),
+            },
+            _ => GroundDrawing::Plane {
+                orientation: self.ground_orientation(),
+            },
+        };
+        let obstacles = self
+            .obstacles
+            .iter()
+            .map(|o| {
+                let (kind, size) = match o.shape {
+                    ObstacleShape::Box(h) => ("box", [2.0 * h[0], 2.0 * h[1], 2.0 * h[2]]),
+                    ObstacleShape::Cylinder { radius, height } => {
+                        ("cylinder", [radius, height, 0.0])
+                    }
+                    ObstacleShape::Sphere(r) => ("sphere", [r, 0.0, 0.0]),
+                };
+                let [x, y, z] = o.position;
+                let [qx, qy, qz, qw] = o.orientation();
+                crate::robot::ShapeDrawing {
+                    kind,
+                    size,
+                    pose: [x, y, z, qx, qy, qz, qw],
+                }
+            })
+            .collect();
+        WorldDrawing { ground, obstacles }
+    }
+}
+
 /// A world named by its file, as an [`EnvConfig`](crate::EnvConfig) holds it: serialised as the path,
 /// loaded (and checked) when deserialised or made with [`WorldRef::load`].
 #[derive(Debug, Clone)]
