@@ -674,7 +674,7 @@ impl WorldSpec {
             WorldFile::default()
         } else {
             serde_norway::from_str(text)
-                .map_err(|e| invalid(format!("{shown}: {}", e.to_string().replace('\n', " "))))?
+                .map_err(|e| invalid(format!("{shown}: {}", shortened(&e.to_string()))))?
         };
         file.resolve(shown, dir)
     }
@@ -716,7 +716,13 @@ impl WorldFile {
                         "{shown}: ground: heightfield: file: {csv_shown}: cannot read: {err}"
                     ))
                 })?;
-                let (rows, columns, heights) = parse_heightfield_csv(&text, &csv_shown)?;
+                let (rows, columns, heights) =
+                    parse_heightfield_csv(&text, &csv_shown).map_err(|err| {
+                        invalid(format!(
+                            "{shown}: ground: heightfield: file: {}",
+                            err_text(&err)
+                        ))
+                    })?;
                 Ground::Heightfield(Heightfield {
                     rows,
                     columns,
@@ -799,6 +805,19 @@ impl WorldFile {
             obstacles,
         })
     }
+}
+
+/// A parser's message on one line and at most ~300 characters: serde quotes a mistyped value whole
+/// (a CSV named as the world file would fill the terminal), so the middle of a long one is cut.
+fn shortened(message: &str) -> String {
+    let message = message.replace('\n', " ");
+    let chars: Vec<char> = message.chars().collect();
+    if chars.len() <= 300 {
+        return message;
+    }
+    let head: String = chars[..200].iter().collect();
+    let tail: String = chars[chars.len() - 80..].iter().collect();
+    format!("{head} [...] {tail}")
 }
 
 fn err_text(err: &crate::Error) -> String {

@@ -102,7 +102,9 @@ def run_cubes(client, scenario, writer):
     _, link_mass = MASSES[scenario["preset"]]
     client.setGravity(0, 0, -9.81)
     x, y, z, yaw = scenario["start"]
-    uid = create_snake(client, joints, [x, y, z], client.getQuaternionFromEuler((0, 0, yaw)), link_mass=link_mass)
+    uid = create_snake(
+        client, joints, [x, y, z], client.getQuaternionFromEuler((0, 0, yaw)), link_mass=link_mass
+    )
     wave = SnakeWave()
     writer.writerow(header(joints))
     for step in range(1, scenario["steps"] + 1):
@@ -115,7 +117,9 @@ def run_cubes(client, scenario, writer):
 def run_urdf(client, scenario, writer):
     x, y, z, yaw = scenario["start"]
     flags = p.URDF_USE_INERTIA_FROM_FILE if scenario.get("inertia") == "file" else 0
-    uid = client.loadURDF(scenario["urdf"], [x, y, z], client.getQuaternionFromEuler([0, 0, yaw]), flags=flags)
+    uid = client.loadURDF(
+        scenario["urdf"], [x, y, z], client.getQuaternionFromEuler([0, 0, yaw]), flags=flags
+    )
     client.setGravity(0, 0, -9.81)
     for link, friction in scenario.get("friction", []):
         client.changeDynamics(uid, link, anisotropicFriction=friction)
