@@ -43,6 +43,10 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
         "run_config" => paths.extend(files("snake-py/configs", Some("yaml"))),
         "urdf" => paths.extend(files("robots", Some("urdf"))),
         "robot_file" => paths.extend(files("robots", Some("yaml"))),
+        "world_file" => {
+            paths.extend(files("worlds", Some("yaml")));
+            paths.extend(files("worlds", Some("csv")));
+        }
         _ => {}
     }
     assert!(!paths.is_empty(), "no seeds for {target}");
@@ -57,11 +61,13 @@ fn check(target: &str, bytes: &[u8]) {
         "urdf" => checks::urdf(bytes),
         "robot_file" => checks::robot_file(bytes),
         "targets_csv" => checks::targets_csv(bytes),
+        "world_file" => checks::world_file(bytes),
         _ => unreachable!("{target}"),
     }
 }
 
-const TARGETS: [&str; 6] = [
+const TARGETS: [&str; 7] = [
+    "world_file",
     "targets_csv",
     "model_file",
     "run_config",
@@ -90,6 +96,9 @@ fn the_seeds_parse() {
     }
     for path in files("robots", Some("yaml")) {
         snake_core::RobotRef::load(&path).expect("a shipped robot file loads");
+    }
+    for path in files("worlds", Some("yaml")) {
+        snake_core::WorldRef::load(&path).expect("a shipped world file loads");
     }
     for bytes in seeds("env_keywords") {
         let serde_json::Value::Object(k) = serde_json::from_slice(&bytes).unwrap() else {
@@ -173,6 +182,12 @@ proptest! {
     fn an_edited_targets_table_is_targets_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
         let all = seeds("targets_csv");
         checks::targets_csv(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+
+    #[test]
+    fn an_edited_world_file_is_a_world_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("world_file");
+        checks::world_file(&apply(all[seed.index(all.len())].clone(), &e));
     }
 
     #[test]

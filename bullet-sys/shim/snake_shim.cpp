@@ -11,6 +11,8 @@
 #include <BulletDynamics/Featherstone/btMultiBodyJointMotor.h>
 #include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
 #include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
+#include <BulletCollision/CollisionDispatch/btInternalEdgeUtility.h>
+#include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
 #include <LinearMath/btQuickprof.h>
 
 #include <cmath>
@@ -37,12 +39,26 @@ void profile_leave_noop() {}
 
 std::once_flag g_process_setup;
 
+// pybullet's MyContactAddedCallback (PSCP 2099-2103).
+bool contact_added(btManifoldPoint& cp, const btCollisionObjectWrapper* colObj0Wrap, int partId0, int index0,
+                   const btCollisionObjectWrapper* colObj1Wrap, int partId1, int index1) {
+    (void)colObj0Wrap;
+    (void)partId0;
+    (void)index0;
+    btAdjustInternalEdgeContacts(cp, colObj1Wrap, colObj0Wrap, partId1, index1);
+    return true;
+}
+
 void process_setup() {
     btSetCustomEnterProfileZoneFunc(profile_enter_noop);
     btSetCustomLeaveProfileZoneFunc(profile_leave_noop);
     // pybullet sets this global to 0 in createEmptyDynamicsWorld; every world here uses the same value,
     // so setting it once keeps it constant while worlds step concurrently.
     gDbvtMargin = btScalar(0);
+    // pybullet installs this contact callback in createEmptyDynamicsWorld (PSCP 2826); it runs for
+    // colliders flagged CF_CUSTOM_MATERIAL_CALLBACK (heightfields) and is a no-op without a triangle
+    // info map, which pybullet builds only for GEOM_CONCAVE_INTERNAL_EDGE. Set here for the same path.
+    gContactAddedCallback = contact_added;
 }
 
 // pybullet's MyOverlapFilterCallback in B3_FILTER_GROUPAMASKB_OR_GROUPBMASKA mode (PSCP 781-852).
@@ -67,6 +83,9 @@ struct ss_world {
     std::unique_ptr<btDbvtBroadphase> broadphase;
     std::unique_ptr<btMultiBodyConstraintSolver> solver;
     std::unique_ptr<btMultiBodyDynamicsWorld> world;
+    // Heightfield samples, which their btHeightfieldTerrainShape reads in place: declared before the
+    // shapes so that they outlive them.
+    std::vector<std::unique_ptr<btScalar[]>> heightfields;
     std::vector<std::unique_ptr<btCollisionShape>> shapes;
     std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
     std::vector<std::unique_ptr<btMultiBodyConstraint>> constraints;
@@ -142,6 +161,9 @@ int build_multibody(ss_world* w, btCollisionShape* shape, double base_mass, cons
         int group = dynamic ? int(btBroadphaseProxy::DefaultFilter) : int(btBroadphaseProxy::StaticFilter);
         int mask = dynamic ? int(btBroadphaseProxy::AllFilter)
                            : int(btBroadphaseProxy::AllFilter ^ btBroadphaseProxy::StaticFilter);
+        // URDF2Bullet flags a heightfield's collider for the contact-added callback (U2B 646-649).
+        if (shape->getShapeType() == TERRAIN_SHAPE_PROXYTYPE)
+            col->setCollisionFlags(col->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
         w->world->addCollisionObject(col.get(), group, mask);
         if (mb_link >= 0) {
             // Revolute joints are never "all fixed", so no link becomes CF_STATIC_OBJECT.
@@ -638,6 +660,77 @@ int ss_world_add_plane(ss_world* w, int* body_out) {
     const double pos[3] = {0, 0, 0};
     const double orn[4] = {0, 0, 0, 1};
     return build_multibody(w, shape, 0.0, pos, orn, 0, nullptr, nullptr, nullptr, nullptr, nullptr, body_out);
+    SS_GUARD_END
+}
+
+int ss_world_add_static(ss_world* w, const ss_static_desc* d, int* body_out) {
+    if (!w || !d || !body_out) return fail(SS_ERR_NULL, "null argument");
+    if (!finite3(d->size) || !finite3(d->position) || !finite3(d->orientation) || !std::isfinite(d->orientation[3]))
+        return fail(SS_ERR_ARGUMENT, "sizes and pose must be finite");
+    const bool heightfield = d->type == SS_GEOM_HEIGHTFIELD;
+    if (heightfield) {
+        if (d->rows < 2 || d->columns < 2) return fail(SS_ERR_ARGUMENT, "a heightfield needs at least 2 x 2 samples");
+        if ((long long)d->rows * (long long)d->columns > (1LL << 26)) return fail(SS_ERR_ARGUMENT, "heightfield too large");
+        if (!d->heights) return fail(SS_ERR_NULL, "heights must not be null");
+        for (long long i = 0; i < (long long)d->rows * d->columns; ++i)
+            if (!std::isfinite(d->heights[i])) return fail(SS_ERR_ARGUMENT, "heights must be finite");
+    }
+    SS_GUARD_BEGIN
+    std::unique_ptr<btCollisionShape> owned;
+    // processCreateCollisionShapeCommand (PSCP 4851-5170) with pybullet's default margin 0.001, set after
+    // construction as there (for boxes and cylinders the order sets the inner extents).
+    switch (d->type) {
+        case SS_GEOM_SPHERE:
+            owned.reset(new btSphereShape(d->size[0]));
+            owned->setMargin(0.001);
+            break;
+        case SS_GEOM_BOX:
+            owned.reset(new btBoxShape(btVector3(d->size[0], d->size[1], d->size[2])));
+            owned->setMargin(0.001);
+            break;
+        case SS_GEOM_CYLINDER:
+            // createCylinderShapeZ(radius, 0.5 * height) is btCylinderShapeZ((radius, radius, 0.5 * height)).
+            owned.reset(new btCylinderShapeZ(btVector3(d->size[0], d->size[0], 0.5 * d->size[1])));
+            owned->setMargin(0.001);
+            break;
+        case SS_GEOM_PLANE:
+            owned.reset(new btStaticPlaneShape(btVector3(0, 0, 1), 0));
+            owned->setMargin(0.001);
+            break;
+        case SS_GEOM_HEIGHTFIELD: {
+            // GEOM_HEIGHTFIELD with heightfieldData (PSCP 4964-5133): the float samples widened to btScalar,
+            // their min and max, the legacy constructor with PHY_FLOAT (which is btScalar in a double build),
+            // flipped winding for z up, then meshScale as local scaling and the accelerator. No margin set.
+            const int width = d->rows;
+            const int height = d->columns;
+            std::unique_ptr<btScalar[]> data(new btScalar[(size_t)width * (size_t)height]);
+            btScalar min_height = d->heights[0];
+            btScalar max_height = d->heights[0];
+            for (int i = 0; i < width * height; i++) {
+                data[i] = d->heights[i];
+                min_height = btMin(min_height, data[i]);
+                max_height = btMax(max_height, data[i]);
+            }
+            btScalar grid_height_scale = 1. / 256.;
+            bool flip_quad_edges = false;
+            int up_axis = 2;
+            auto terrain = new btHeightfieldTerrainShape(width, height, data.get(), grid_height_scale, min_height,
+                                                         max_height, up_axis, PHY_FLOAT, flip_quad_edges);
+            owned.reset(terrain);
+            terrain->setUserValue3(1);  // heightfieldTextureScaling's default; drawing only
+            terrain->setFlipTriangleWinding(true);
+            terrain->setLocalScaling(btVector3(d->size[0], d->size[1], d->size[2]));
+            terrain->buildAccelerator();
+            w->heightfields.push_back(std::move(data));
+            break;
+        }
+        default:
+            return fail(SS_ERR_ARGUMENT, "unknown static shape type");
+    }
+    btCollisionShape* shape = owned.get();
+    w->shapes.push_back(std::move(owned));
+    return build_multibody(w, shape, 0.0, d->position, d->orientation, 0, nullptr, nullptr, nullptr, nullptr, nullptr,
+                           body_out);
     SS_GUARD_END
 }
 

@@ -164,6 +164,30 @@ int ss_world_num_bodies(const ss_world* world, int* count);
 
 /* createMultiBody(0, createCollisionShape(GEOM_PLANE)): a static plane z = 0. */
 int ss_world_add_plane(ss_world* world, int* body_out);
+
+/* A static body of a world file: createMultiBody(0, createCollisionShape(type, ...), -1, position,
+ * orientation). Types have pybullet's GEOM_* values. */
+#define SS_GEOM_SPHERE 2      /* size[0] = radius */
+#define SS_GEOM_BOX 3         /* size = half extents (createCollisionShape's halfExtents) */
+#define SS_GEOM_CYLINDER 4    /* size[0] = radius, size[1] = height (along z): btCylinderShapeZ */
+#define SS_GEOM_PLANE 6       /* normal (0, 0, 1), constant 0 */
+#define SS_GEOM_HEIGHTFIELD 9 /* size = meshScale; heights, rows, columns below */
+
+typedef struct ss_static_desc {
+    int type; /* SS_GEOM_* */
+    double size[3];
+    double position[3];
+    double orientation[4];
+    /* GEOM_HEIGHTFIELD with heightfieldData: numHeightfieldRows (values per grid line, along x) and
+     * numHeightfieldColumns (lines, along y); heights[y * rows + x], float32 as pybullet's client
+     * sends them. */
+    int rows;
+    int columns;
+    const float* heights;
+} ss_static_desc;
+
+/* Adds a static body (see ss_static_desc); the ground and a world file's obstacles. */
+int ss_world_add_static(ss_world* world, const ss_static_desc* desc, int* body_out);
 /* createMultiBody(...) with one box shape for every cube, then pybullet's default joint motors. */
 int ss_world_add_box_chain(ss_world* world, const ss_chain_desc* desc, int* body_out);
 

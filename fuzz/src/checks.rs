@@ -8,7 +8,8 @@ use std::path::Path;
 use serde_json::Value;
 use snake_core::robot::{Robot, RobotSpec, Simulation};
 use snake_core::urdf::{InertiaSource, UrdfRobot};
-use snake_core::StartPose;
+use snake_core::world_file::{parse_heightfield_csv, Ground};
+use snake_core::{StartPose, WorldSpec};
 use snake_rl::config::{env_from_keywords, parse_yaml, RunConfig};
 use snake_rl::model::{parse_checkpoint, parse_policy};
 
@@ -129,6 +130,52 @@ pub fn robot_file(bytes: &[u8]) {
             Ok(spec) => {
                 if spec.urdf.check_inertia(spec.inertia).is_ok() {
                     build_and_step(&spec);
+                }
+            }
+            Err(e) => one_line(&e.to_string()),
+        })
+    });
+}
+
+/// A world file (`snake-cli run --world`, the env's `world`) next to a small heightfield `hills.csv`
+/// that it may name, and the same bytes as a heightfield CSV: a world or grid, or a one-line error;
+/// a small world that loads is built under a 2-joint snake and stepped.
+pub fn world_file(bytes: &[u8]) {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return;
+    };
+    match parse_heightfield_csv(text, "fuzzed.csv") {
+        Ok((rows, columns, heights)) => {
+            assert!(rows >= 2 && columns >= 2 && heights.len() == rows * columns);
+            assert!(heights.iter().all(|h| h.is_finite()));
+        }
+        Err(e) => one_line(&e.to_string()),
+    }
+    with_file("hills.csv", b"0,0.1,0\n0.2,0,0.1\n", |_| {
+        with_file("fuzzed.yaml", bytes, |path| match WorldSpec::load(path) {
+            Ok(world) => {
+                // Building 10,000 pegs or 2 million samples is allowed but slow: fuzz small worlds.
+                let samples = match &world.ground {
+                    Ground::Heightfield(h) => h.heights.len(),
+                    _ => 0,
+                };
+                if world.obstacles.len() <= 64 && samples <= 1 << 14 {
+                    let config = snake_core::Preset::Paper.config(2);
+                    let start = StartPose {
+                        z: 1.0,
+                        ..StartPose::resting(0.25)
+                    };
+                    if let Ok(mut snake) = snake_core::Snake::in_world(&config, start, &world) {
+                        for _ in 0..8 {
+                            if snake
+                                .set_targets(&[0.3, -0.3])
+                                .and_then(|()| snake.step())
+                                .is_err()
+                            {
+                                return;
+                            }
+                        }
+                    }
                 }
             }
             Err(e) => one_line(&e.to_string()),

@@ -9,6 +9,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::{
     Gait, LateralUndulation, Preset, Robot, RobotGait, RobotSpec, Simulation, Snake, StartPose,
+    WorldSpec,
 };
 
 /// The pybullet side of the benchmark, in the repository this binary was built from.
@@ -43,6 +44,10 @@ pub struct BenchArgs {
     /// both sides replay the same precomputed targets.
     #[arg(long, conflicts_with = "joints")]
     pub robot: Option<PathBuf>,
+    /// Measure the built-in snake on this world file beside the flat plane, in the same run
+    /// (interleaved runs; pybullet is not measured): steps/s on each and their ratio.
+    #[arg(long, conflicts_with_all = ["robot", "python"])]
+    pub world: Option<PathBuf>,
 }
 
 fn median(mut values: Vec<f64>) -> f64 {
@@ -57,8 +62,15 @@ fn median(mut values: Vec<f64>) -> f64 {
 
 /// Steps per second of one run: gait targets, position control and a physics step, as pybullet's loop.
 fn one_run(joints: usize, steps: u64) -> Result<f64> {
+    one_run_in(joints, steps, &WorldSpec::default())
+}
+
+/// [`one_run`] on a world, the snake's start raised as `snake-cli run` raises it.
+fn one_run_in(joints: usize, steps: u64, world: &WorldSpec) -> Result<f64> {
     let config = Preset::Paper.config(joints);
-    let mut snake = Snake::new(&config, StartPose::resting(config.half_extent))?;
+    let mut start = StartPose::resting(config.half_extent);
+    start.z += world.ground_top((joints as f64 + 0.5) * config.link_spacing() + config.half_extent);
+    let mut snake = Snake::in_world(&config, start, world)?;
     let mut gait = LateralUndulation::default();
     let mut targets = vec![0.0; joints];
     let clock = Instant::now();
@@ -270,6 +282,9 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if let Some(path) = &args.robot {
         return bench_robot(args, path);
     }
+    if let Some(path) = &args.world {
+        return bench_world(args, path);
+    }
     say!(
         "physics steps per second, one core, gait running; median of {} runs of {} steps",
         args.repeats,
@@ -322,6 +337,45 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             Some(t) => say!("{joints:>6}  {rate:>16.0}  {t:>16.0}  {:>6.2}x", rate / t)?,
             None => say!("{joints:>6}  {rate:>16.0}  {:>16}  {:>7}", "-", "-")?,
         }
+    }
+    Ok(())
+}
+
+/// `--world`: the built-in snake on the world and on the flat plane, runs interleaved so that both see
+/// the same machine load.
+fn bench_world(args: &BenchArgs, path: &Path) -> Result<()> {
+    let world = WorldSpec::load(path)?;
+    say!(
+        "physics steps per second, one core, gait running; median of {} runs of {} steps",
+        args.repeats,
+        args.steps
+    )?;
+    say!(
+        "world {}: {} obstacles{}",
+        path.display(),
+        world.obstacles.len(),
+        match &world.ground {
+            snake_core::world_file::Ground::Heightfield(h) =>
+                format!(", heightfield {} x {}", h.rows, h.columns),
+            snake_core::world_file::Ground::Slope(d) => format!(", slope {d} degrees"),
+            snake_core::world_file::Ground::Plane => String::new(),
+        }
+    )?;
+    say!(
+        "{:>6}  {:>16}  {:>16}  {:>7}",
+        "joints",
+        "flat plane",
+        "world",
+        "ratio"
+    )?;
+    for &joints in &args.joints {
+        let (mut on_flat, mut on_world) = (Vec::new(), Vec::new());
+        for _ in 0..args.repeats {
+            on_flat.push(one_run(joints, args.steps)?);
+            on_world.push(one_run_in(joints, args.steps, &world)?);
+        }
+        let (f, w) = (median(on_flat), median(on_world));
+        say!("{joints:>6}  {f:>16.0}  {w:>16.0}  {:>6.2}x", w / f)?;
     }
     Ok(())
 }

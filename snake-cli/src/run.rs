@@ -16,6 +16,7 @@ use snake_core::{
     Gait, GaitChoice, GaitKind, InertiaSource, JointRoles, LateralUndulation, Preset, Robot,
     RobotGait, RobotSpec, Simulation, Snake, SnakeConfig, StartPose,
 };
+use snake_core::{WorldRef, WorldSpec};
 
 use crate::output::{check_distinct, say, OutputFile};
 use crate::plot::{self, PathPlot};
@@ -71,6 +72,11 @@ pub struct RunArgs {
     /// (URDF_USE_INERTIA_FROM_FILE). Default: the robot file's, else shapes.
     #[arg(long, requires = "robot")]
     pub inertia: Option<InertiaSource>,
+    /// A world file (YAML): the ground (plane, slope, heightfield, rough), its friction and static
+    /// obstacles, built before the robot as pybullet would (docs/worlds.md, worlds/). Default: the
+    /// flat plane. Without --start, the body starts raised by the ground's highest point near it.
+    #[arg(long)]
+    pub world: Option<PathBuf>,
     /// Write the trajectory here as CSV (one row per 1/240 s step).
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -168,11 +174,34 @@ impl BodyPlan {
         }
     }
 
-    fn build(&self, start: StartPose) -> Result<Built> {
+    fn build(&self, start: StartPose, world: &WorldSpec) -> Result<Built> {
         Ok(match self {
-            BodyPlan::Cubes { config, .. } => Built::Cubes(Snake::new(config, start)?),
-            BodyPlan::Robot(spec) => Built::Robot(Robot::new(spec, start)?),
+            BodyPlan::Cubes { config, .. } => Built::Cubes(Snake::in_world(config, start, world)?),
+            BodyPlan::Robot(spec) => Built::Robot(Robot::in_world(spec, start, world)?),
         })
+    }
+
+    /// Largest distance of a body part from the base at rest, metres: the footprint over which a
+    /// world's ground lifts the default start.
+    fn reach(&self) -> f64 {
+        match self {
+            BodyPlan::Cubes { config, .. } => {
+                (config.joints as f64 + 0.5) * config.link_spacing() + config.half_extent
+            }
+            BodyPlan::Robot(spec) => {
+                // The sum of the joint offsets bounds every link's distance from the root.
+                spec.urdf
+                    .links
+                    .iter()
+                    .filter_map(|l| l.joint.as_ref())
+                    .map(|j| {
+                        let [x, y, z] = j.origin.xyz;
+                        (x * x + y * y + z * z).sqrt()
+                    })
+                    .sum::<f64>()
+                    + 2.0 * self.draw_half_extent()
+            }
+        }
     }
 
     /// Half the size of a body part, for the plot's squares.
@@ -270,6 +299,8 @@ pub struct RunPlan {
     pub outputs: Outputs,
     /// Simulated seconds asked for.
     pub seconds: f64,
+    /// The world file, if any (`None`: the flat plane).
+    pub world: Option<WorldRef>,
 }
 
 impl RunPlan {
@@ -347,11 +378,22 @@ impl RunPlan {
                 (Drive::Gait(gait), steps, args.seconds)
             }
         };
+        let world = args.world.as_deref().map(WorldRef::load).transpose()?;
         let start = match (&args.start, &body) {
             (Some(s), _) => *s,
             (None, BodyPlan::Cubes { config, .. }) => StartPose::resting(config.half_extent),
             (None, BodyPlan::Robot(spec)) => spec.default_start(),
         };
+        // On uneven ground a start made for the plane may lie inside it: raise the default start by
+        // the ground's highest point under the body (an explicit --start is kept as given).
+        let start = match (&args.start, &world) {
+            (None, Some(w)) => StartPose {
+                z: start.z + w.spec().ground_top(body.reach()),
+                ..start
+            },
+            _ => start,
+        };
+        start.validate()?;
         Ok(RunPlan {
             body,
             start,
@@ -367,10 +409,29 @@ impl RunPlan {
                 quiet: false,
             },
             seconds,
+            world,
         })
     }
 
+    /// The world for the builders: the file's, else the flat plane.
+    pub fn world_spec(&self) -> WorldSpec {
+        self.world
+            .as_ref()
+            .map_or_else(WorldSpec::default, |w| w.spec().clone())
+    }
+
     fn meta(&self, built: &Built) -> Result<serde_json::Value> {
+        let mut meta = self.body_meta(built)?;
+        if let Some(w) = &self.world {
+            meta["world"] = serde_json::json!({
+                "file": w.path(),
+                "drawing": w.spec().drawing(),
+            });
+        }
+        Ok(meta)
+    }
+
+    fn body_meta(&self, built: &Built) -> Result<serde_json::Value> {
         let s = &self.start;
         Ok(match (&self.body, &self.drive) {
             (BodyPlan::Cubes { config, preset }, Drive::Gait(gait)) => serde_json::json!({
@@ -494,7 +555,7 @@ pub fn execute(plan: &RunPlan) -> Result<RunReport> {
         (None, Some(_)) => Some(recording::TraceFile::temporary()?),
         (None, None) => None,
     };
-    let mut built = plan.body.build(plan.start)?;
+    let mut built = plan.body.build(plan.start, &plan.world_spec())?;
     let parts = built.sim().body_poses()?.len();
     let mut trace = match &trace_file {
         Some(f) => Some(TraceWriter::create(

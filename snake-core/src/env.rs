@@ -28,6 +28,7 @@ pub use trace::PhysicsTrace;
 use crate::error::{invalid, Result};
 use crate::math::StartPose;
 use crate::robot::Simulation;
+use crate::world_file::WorldSpec;
 use crate::{Robot, Snake};
 use action::Driver;
 use observation::JointScratch;
@@ -409,9 +410,11 @@ impl SnakeEnv {
         if let Some(trace) = self.trace.as_mut() {
             trace.clear();
         }
+        let flat = WorldSpec::default();
+        let world = self.config.world.as_ref().map_or(&flat, |w| w.spec());
         let mut body = match &self.config.robot {
-            None => EnvBody::Cubes(Snake::new(&self.config.snake, start)?),
-            Some(robot) => EnvBody::Robot(Robot::new(robot.spec(), start)?),
+            None => EnvBody::Cubes(Snake::in_world(&self.config.snake, start, world)?),
+            Some(robot) => EnvBody::Robot(Robot::in_world(robot.spec(), start, world)?),
         };
         let snake = body.sim_mut();
         // The paper steps once before the first observation.

@@ -12,6 +12,8 @@
 //!   library ([`Serpenoid`]: lateral undulation, sidewinding, rolling, linear progression, turning).
 //! - [`env`](mod@env): [`SnakeEnv`], the paper's reinforcement-learning environment (Gymnasium-style
 //!   `reset`/`step`), configured by [`EnvConfig`].
+//! - [`world_file`]: [`WorldSpec`], the ground (plane, slope, heightfield) and static obstacles of a
+//!   world file.
 //! - [`vec_env`]: [`VecSnakeEnv`], many envs stepped together across threads with automatic resets.
 //!
 //! ```
@@ -43,6 +45,7 @@ pub mod snake;
 pub mod urdf;
 pub mod vec_env;
 pub mod world;
+pub mod world_file;
 
 pub use config::{Preset, SnakeConfig};
 pub use env::{
@@ -61,5 +64,7 @@ pub use snake::Snake;
 pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};
 pub use world::{
-    BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose, World,
+    BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose,
+    StaticShape, World,
 };
+pub use world_file::{WorldRef, WorldSpec};

@@ -94,6 +94,31 @@ pub const GAIT_OFFSET: (f64, f64) = (-std::f64::consts::FRAC_PI_2, std::f64::con
 /// Range of a library gait's start-up ramp, seconds.
 pub const GAIT_RAMP: (f64, f64) = (0.0, 600.0);
 
+/// Largest heightfield CSV or world file read, bytes (64 MiB: a full [`MAX_HEIGHTFIELD_SAMPLES`] grid
+/// written with ~20 characters a value).
+pub const MAX_HEIGHTFIELD_BYTES: u64 = 64 << 20;
+
+/// Most samples of a heightfield along x or along y.
+pub const MAX_HEIGHTFIELD_SIDE: usize = 4096;
+
+/// Most samples of a heightfield in all (2^21: ~17 MB of doubles in Bullet, plus its accelerator).
+pub const MAX_HEIGHTFIELD_SAMPLES: usize = 1 << 21;
+
+/// Largest |height| of a heightfield sample, and |z| of an obstacle, metres.
+pub const MAX_TERRAIN_HEIGHT: f64 = 1.0e3;
+
+/// Most obstacles of one world, pegs included: each is a static body in Bullet's broadphase.
+pub const MAX_OBSTACLES: usize = 10_000;
+
+/// Largest size of an obstacle (a half extent, radius or height), a grid spacing or a scale, metres.
+pub const MAX_OBSTACLE_SIZE: f64 = 1.0e3;
+
+/// Largest |tilt| of a slope ground, degrees (steeper is a wall, better made of obstacles).
+pub const MAX_SLOPE_DEGREES: f64 = 80.0;
+
+/// Largest lateral friction coefficient of the ground or an obstacle.
+pub const MAX_WORLD_FRICTION: f64 = 1.0e3;
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {

@@ -30,6 +30,7 @@ use crate::limits::MAX_URDF_BYTES;
 use crate::math::StartPose;
 use crate::urdf::{Geometry, InertiaSource, UrdfRobot};
 use crate::world::{BaseState, BodyId, Dynamics, Pose, World};
+use crate::world_file::WorldSpec;
 use crate::{Snake, SnakeConfig};
 
 /// pybullet's default position gain of `setJointMotorControlArray`.
@@ -386,11 +387,17 @@ pub struct Robot {
 impl Robot {
     /// Builds the world and loads the robot with its root link frame at `start`.
     pub fn new(spec: &RobotSpec, start: StartPose) -> Result<Self> {
+        Self::in_world(spec, start, &WorldSpec::default())
+    }
+
+    /// As [`Robot::new`] on the ground and among the obstacles of `ground` (a world file), built where
+    /// the plane is built today: before the robot and gravity.
+    pub fn in_world(spec: &RobotSpec, start: StartPose, ground: &WorldSpec) -> Result<Self> {
         start.validate()?;
         let defaults = SnakeConfig::default();
         let mut world = World::new()?;
         world.set_time_step(defaults.dt)?;
-        world.add_plane()?;
+        ground.build(&mut world)?;
         let body = world.add_urdf(
             &spec.urdf,
             [start.x, start.y, start.z],

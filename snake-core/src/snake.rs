@@ -6,6 +6,7 @@ use crate::config::SnakeConfig;
 use crate::error::Result;
 use crate::math::StartPose;
 use crate::world::{BaseState, BodyId, BoxChain, BoxLink, Dynamics, JointState, Pose, World};
+use crate::world_file::WorldSpec;
 
 /// A snake on a ground plane, built in the order the reference builds it: plane, gravity, snake
 /// (base then links), then friction on the base and on every link.
@@ -20,11 +21,17 @@ pub struct Snake {
 impl Snake {
     /// Builds the world and places the snake's base at `start`.
     pub fn new(config: &SnakeConfig, start: StartPose) -> Result<Self> {
+        Self::in_world(config, start, &WorldSpec::default())
+    }
+
+    /// As [`Snake::new`] on the ground and among the obstacles of `ground` (a world file), built where
+    /// the plane is built today: before gravity and the snake.
+    pub fn in_world(config: &SnakeConfig, start: StartPose, ground: &WorldSpec) -> Result<Self> {
         config.validate()?;
         start.validate()?;
         let mut world = World::new()?;
         world.set_time_step(config.dt)?;
-        world.add_plane()?;
+        ground.build(&mut world)?;
         world.set_gravity(Vector3::new(0.0, 0.0, config.gravity))?;
 
         let h = config.half_extent;

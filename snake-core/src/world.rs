@@ -150,6 +150,44 @@ pub struct Dynamics {
     pub angular_damping: Option<f64>,
 }
 
+/// The collision shape of a static body (pybullet's `createCollisionShape` types a world file uses).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StaticShape<'a> {
+    /// `GEOM_PLANE`: the plane z = 0 of the body's frame.
+    Plane,
+    /// `GEOM_BOX` with `halfExtents`.
+    Box {
+        /// Half extents, metres.
+        half_extents: [f64; 3],
+    },
+    /// `GEOM_SPHERE`.
+    Sphere {
+        /// Radius, metres.
+        radius: f64,
+    },
+    /// `GEOM_CYLINDER` (axis along z).
+    Cylinder {
+        /// Radius, metres.
+        radius: f64,
+        /// Full height, metres.
+        height: f64,
+    },
+    /// `GEOM_HEIGHTFIELD` with `heightfieldData`: `rows` values along x per grid line
+    /// (`numHeightfieldRows`), `columns` lines along y (`numHeightfieldColumns`), `heights[y * rows + x]`,
+    /// float32 as pybullet's client sends them; `scale` is `meshScale`. Bullet centres the grid on the
+    /// body's origin, vertically at the middle of the lowest and highest sample.
+    Heightfield {
+        /// Values per grid line.
+        rows: usize,
+        /// Grid lines.
+        columns: usize,
+        /// The samples, `rows * columns` of them.
+        heights: &'a [f32],
+        /// `meshScale`: grid spacing in x and y, and the height factor, metres.
+        scale: [f64; 3],
+    },
+}
+
 /// A tree of equal boxes joined by revolute joints, as pybullet's `createMultiBody` makes it from one
 /// `GEOM_BOX` collision shape. Inertial frames are the link frames.
 #[derive(Debug, Clone, PartialEq)]
@@ -272,6 +310,81 @@ impl World {
         let mut id = 0;
         // SAFETY: live world; id is a valid out pointer.
         check(unsafe { bullet_sys::ss_world_add_plane(self.ptr(), &mut id) })?;
+        self.joints.push(0);
+        Ok(BodyId(id))
+    }
+
+    /// Adds a static body: `createMultiBody(0, createCollisionShape(shape), -1, position, orientation)`
+    /// with the orientation as (x, y, z, w).
+    pub fn add_static(
+        &mut self,
+        shape: &StaticShape<'_>,
+        position: [f64; 3],
+        orientation: [f64; 4],
+    ) -> Result<BodyId> {
+        finite(&position, "static body position")?;
+        finite(&orientation, "static body orientation")?;
+        let mut desc = bullet_sys::ss_static_desc {
+            type_: 0,
+            size: [0.0; 3],
+            position,
+            orientation,
+            rows: 0,
+            columns: 0,
+            heights: std::ptr::null(),
+        };
+        let positive = |v: &[f64], what: &str| -> Result<()> {
+            if v.iter().all(|x| x.is_finite() && *x > 0.0) {
+                Ok(())
+            } else {
+                Err(invalid(format!(
+                    "{what} must be positive and finite, got {v:?}"
+                )))
+            }
+        };
+        match *shape {
+            StaticShape::Plane => desc.type_ = bullet_sys::SS_GEOM_PLANE as i32,
+            StaticShape::Box { half_extents } => {
+                positive(&half_extents, "box half extents")?;
+                desc.type_ = bullet_sys::SS_GEOM_BOX as i32;
+                desc.size = half_extents;
+            }
+            StaticShape::Sphere { radius } => {
+                positive(&[radius], "sphere radius")?;
+                desc.type_ = bullet_sys::SS_GEOM_SPHERE as i32;
+                desc.size = [radius, 0.0, 0.0];
+            }
+            StaticShape::Cylinder { radius, height } => {
+                positive(&[radius, height], "cylinder radius and height")?;
+                desc.type_ = bullet_sys::SS_GEOM_CYLINDER as i32;
+                desc.size = [radius, height, 0.0];
+            }
+            StaticShape::Heightfield {
+                rows,
+                columns,
+                heights,
+                scale,
+            } => {
+                positive(&scale, "heightfield scale")?;
+                if rows < 2 || columns < 2 || rows.checked_mul(columns) != Some(heights.len()) {
+                    return Err(invalid(format!(
+                        "a heightfield of {rows} x {columns} needs rows, columns >= 2 and that many \
+                         heights, got {}",
+                        heights.len()
+                    )));
+                }
+                desc.type_ = bullet_sys::SS_GEOM_HEIGHTFIELD as i32;
+                desc.size = scale;
+                desc.rows = i32::try_from(rows).map_err(|_| invalid("heightfield too large"))?;
+                desc.columns =
+                    i32::try_from(columns).map_err(|_| invalid("heightfield too large"))?;
+                desc.heights = heights.as_ptr();
+            }
+        }
+        let mut id = 0;
+        // SAFETY: live world; desc.heights (when set) addresses rows * columns floats that outlive the
+        // call (the shim copies them).
+        check(unsafe { bullet_sys::ss_world_add_static(self.ptr(), &desc, &mut id) })?;
         self.joints.push(0);
         Ok(BodyId(id))
     }

@@ -531,6 +531,8 @@ pub fn env_keyword_defaults(task: Task) -> Map<String, Value> {
     }
     // No robot: the built-in snake (the field is left out of serialised configs when unset).
     map.entry("robot").or_insert(Value::Null);
+    // No world file: the flat plane.
+    map.entry("world").or_insert(Value::Null);
     map
 }
 

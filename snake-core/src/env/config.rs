@@ -11,6 +11,7 @@ use crate::limits::{
     MAX_PHYSICS_STEPS_PER_ENV_STEP, MAX_POSITION, MAX_REWARD_WEIGHT, MAX_START_HEIGHT, MAX_YAW,
 };
 use crate::robot::RobotRef;
+use crate::world_file::WorldRef;
 
 /// Everything that defines a [`SnakeEnv`](super::SnakeEnv); the defaults are the paper's env
 /// (`Snake-v0` of snakebot-gym) except for the snake's masses, which follow the paper's text (see
@@ -32,6 +33,11 @@ pub struct EnvConfig {
     /// joints'; the start distribution places the root link's frame.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub robot: Option<RobotRef>,
+    /// A world file (ground, friction, obstacles; docs/worlds.md) instead of the flat plane (`None`):
+    /// its path, loaded when the configuration is made, built at every reset before the robot. The
+    /// start distribution is kept as given: on raised ground, raise `start`'s z to match.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub world: Option<WorldRef>,
     /// Goal position (x, y) on the plane, metres ((0, -10)); used when `goal_distribution` is `None`.
     pub goal: (f64, f64),
     /// Draw each episode's goal relative to its start pose instead of using `goal` (`None`).
@@ -60,6 +66,7 @@ impl Default for EnvConfig {
         EnvConfig {
             snake: SnakeConfig::default(),
             robot: None,
+            world: None,
             goal: (0.0, -10.0),
             goal_distribution: None,
             goal_radius: 1.0,

@@ -67,7 +67,9 @@ class SnakeEnv(gymnasium.Env):
     parameters over the preset's), ``robot`` (None; or a URDF or robot file, see ``robots/``: then the
     action holds one value per movable joint in pybullet's joint order, the observation one (angle,
     velocity) pair per movable joint, and the start places the root link's frame; ``joints`` and
-    ``preset`` are ignored), ``render_mode`` (None or "rgb_array").
+    ``preset`` are ignored), ``world`` (None: the flat plane; or a world file, see ``worlds/`` and
+    docs/worlds.md: its ground, friction and obstacles, built at each reset before the robot; raise
+    ``start``'s z on raised ground), ``render_mode`` (None or "rgb_array").
 
     **Limits**: positions (start x, y; goals) within 10 km, start heights 0-100 m, reward weights within
     1e6, ``physics_steps_per_env_step`` at most 240, episodes at most 10^7 steps (``snakesim.limits.LIMITS``
@@ -102,6 +104,7 @@ class SnakeEnv(gymnasium.Env):
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
         robot: str | os.PathLike[str] | None = _D["robot"],
+        world: str | os.PathLike[str] | None = _D["world"],
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -122,6 +125,7 @@ class SnakeEnv(gymnasium.Env):
             reward=reward,
             snake=snake,
             robot=None if robot is None else os.fspath(robot),
+            world=None if world is None else os.fspath(world),
         )
         self._config_json = env_config(task=self.task, **self._kwargs)
         self._env = _core.Env(self._config_json)
@@ -269,6 +273,7 @@ class SnakeGoalEnv(SnakeEnv):
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
         robot: str | os.PathLike[str] | None = _G["robot"],
+        world: str | os.PathLike[str] | None = _G["world"],
         render_mode: str | None = None,
     ) -> None:
         super().__init__(
@@ -286,6 +291,7 @@ class SnakeGoalEnv(SnakeEnv):
             reward=reward,
             snake=snake,
             robot=robot,
+            world=world,
             render_mode=render_mode,
         )
 

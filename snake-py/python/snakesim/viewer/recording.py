@@ -540,6 +540,11 @@ def log_trace(recording, path: str | os.PathLike) -> int:
         rewards=False,
         shapes=meta.get("shapes"),
     )
+    world = meta.get("world")
+    if world is not None:
+        from snakesim.viewer.world_draw import log_world
+
+        log_world(_rerun(), recording, world["drawing"], _shape_archetype)
     log.start_episode()
     count = 0
     for block in blocks:
