@@ -14,7 +14,7 @@ use clap::Args;
 use snake_core::urdf::Geometry;
 use snake_core::{
     Gait, GaitKind, InertiaSource, LateralUndulation, Preset, Robot, RobotGait, RobotSpec,
-    Simulation, Snake, SnakeConfig, StartPose,
+    Simulation, SkinAxis, SkinFriction, Snake, SnakeConfig, StartPose,
 };
 
 use crate::output::{check_distinct, say, OutputFile};
@@ -61,6 +61,15 @@ pub struct RunArgs {
     /// changeDynamics(anisotropicFriction=...)); replaces the robot file's.
     #[arg(long, requires = "robot", value_parser = parse_friction)]
     pub anisotropic_friction: Option<[f64; 3]>,
+    /// Skin friction F,B,T (forward, backward, transverse; Hu et al. 2009) of every cube or robot link,
+    /// in place of their lateral and anisotropic friction; each is multiplied by the ground's friction
+    /// (pybullet's 1). For a robot it replaces the robot file's skin_friction.
+    #[arg(long, value_parser = parse_skin)]
+    pub skin_friction: Option<[f64; 3]>,
+    /// Head direction of the skin in each link's frame: x, -x, y, -y, z or -z. Default: the built-in
+    /// snake's head direction (-y); for a robot, its robot file's skin axis, else x.
+    #[arg(long, requires = "skin_friction", allow_hyphen_values = true)]
+    pub skin_axis: Option<SkinAxis>,
     /// Where the robot's link inertias come from: shapes (pybullet's default) or file
     /// (URDF_USE_INERTIA_FROM_FILE). Default: the robot file's, else shapes.
     #[arg(long, requires = "robot")]
@@ -111,6 +120,14 @@ fn parse_friction(text: &str) -> Result<[f64; 3], String> {
             "'{text}': anisotropic friction must be finite and >= 0"
         ))
     }
+}
+
+fn parse_skin(text: &str) -> Result<[f64; 3], String> {
+    let [f, b, t] = parse_numbers::<3>(text, "F,B,T")?;
+    SkinFriction::new(f, b, t)
+        .validate(&format!("--skin-friction '{text}'"))
+        .map_err(|e| e.to_string())?;
+    Ok([f, b, t])
 }
 
 /// What is simulated.
@@ -245,7 +262,11 @@ impl RunPlan {
                 if args.joints < 1 {
                     bail!("--joints must be at least 1, got {}", args.joints);
                 }
-                let config = args.preset.config(args.joints);
+                let mut config = args.preset.config(args.joints);
+                config.skin_friction = args.skin_friction.map(|[f, b, t]| SkinFriction {
+                    axis: args.skin_axis,
+                    ..SkinFriction::new(f, b, t)
+                });
                 config.validate()?;
                 BodyPlan::Cubes {
                     config,
@@ -536,13 +557,24 @@ fn summary(
     let moved = end.position - start_position;
     let distance = moved.xy().norm();
     match (&plan.body, &plan.drive) {
-        (BodyPlan::Cubes { config, preset }, _) => say!(
-            "snake: {} joints ({} cubes), preset {preset}, gait {}, steering {}",
-            config.joints,
-            config.joints + 1,
-            plan.gait,
-            plan.steer
-        )?,
+        (BodyPlan::Cubes { config, preset }, _) => {
+            say!(
+                "snake: {} joints ({} cubes), preset {preset}, gait {}, steering {}",
+                config.joints,
+                config.joints + 1,
+                plan.gait,
+                plan.steer
+            )?;
+            if let Some(skin) = &config.skin_friction {
+                say!(
+                    "skin friction: forward {}, backward {}, transverse {}, axis {}",
+                    skin.forward,
+                    skin.backward,
+                    skin.transverse,
+                    skin.axis.unwrap_or(SnakeConfig::HEAD_AXIS)
+                )?;
+            }
+        }
         (BodyPlan::Robot(spec), drive) => {
             let how = match drive {
                 Drive::Gait(_) => format!("gait {}, steering {}", plan.gait, plan.steer),

@@ -38,12 +38,14 @@ pub mod gait;
 pub mod limits;
 pub mod math;
 pub mod robot;
+pub mod skin;
 pub mod snake;
 pub mod urdf;
 pub mod vec_env;
 pub mod world;
 
 pub use config::{Preset, SnakeConfig};
+pub use skin::{SkinAxis, SkinFriction};
 pub use env::{
     ActionConfig, ActionMode, DistancePrecision, EnvConfig, GoalDistribution, Info,
     ObservationLayout, ResetOptions, RewardConfig, RewardTerms, SnakeEnv, StartDistribution,

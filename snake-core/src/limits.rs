@@ -70,6 +70,11 @@ pub const MAX_URDF_BYTES: u64 = 16 << 20;
 /// Most rows of a joint-targets CSV (`snake-cli run --targets`): an hour of 1/240 s steps.
 pub const MAX_TARGET_ROWS: usize = 864_000;
 
+/// Largest skin friction coefficient (forward, backward, transverse). Bullet clamps every combined lateral
+/// friction (the product of two objects' coefficients) at 10; with the ground's default 1, a larger skin
+/// coefficient would act as 10 anyway.
+pub const MAX_SKIN_FRICTION: f64 = 10.0;
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {
