@@ -157,22 +157,27 @@ protected:
             const btVector3& normal_dir = cp.m_normalWorldOnB;
             btVector3 axis = col->getWorldTransform().getBasis() * skin->axis;
             btVector3 t = axis - normal_dir * axis.dot(normal_dir);
-            if (t.length2() > btScalar(1e-12)) {
-                // Rows along side * t and the normal to it: a positive impulse is then a force on the skin
-                // link along +t (or +n), and the row's velocity is the skin's sliding velocity along it.
-                t.normalize();
-                btVector3 dt = t * side;
-                btVector3 dn = normal_dir.cross(dt);
-                btScalar relaxation;
-                const btScalar zero = 0;
-                setupMultiBodyContactConstraint(rt, dt, zero, cp, info, relaxation, true);
-                setupMultiBodyContactConstraint(rn, dn, zero, cp, info, relaxation, true);
-            } else {
-                // The axis is normal to the contact plane: every in-plane direction is transverse. Bullet's
-                // rows stay (their directions are orthonormal in the plane unless anisotropic friction
-                // scaled them, which a skin link's contacts ignore only in this rare pose).
-                sc.forward = sc.backward = sc.transverse;
+            // |t| is the sine of the angle between the skin axis and the contact normal. Where the axis
+            // leaves the contact plane, the forward/backward coefficients blend into the transverse one in
+            // proportion to it: the law as written (t normalised) would switch between them at random
+            // when the axis is normal to the plane, where every in-plane direction is transverse. For a
+            // link lying on the ground |t| is 1 and the law holds as written.
+            const btScalar w = btMin(t.length(), btScalar(1));
+            sc.forward = sc.transverse + (sc.forward - sc.transverse) * w;
+            sc.backward = sc.transverse + (sc.backward - sc.transverse) * w;
+            if (!(w > btScalar(1e-9))) {
+                btVector3 other_dir;
+                btPlaneSpace1(normal_dir, t, other_dir);
             }
+            // Rows along side * t and the normal to it: a positive impulse is then a force on the skin link
+            // along +t (or +n), and the row's velocity is the skin's sliding velocity along it.
+            t.normalize();
+            const btVector3 dt = t * side;
+            const btVector3 dn = normal_dir.cross(dt);
+            btScalar relaxation;
+            const btScalar zero = 0;
+            setupMultiBodyContactConstraint(rt, dt, zero, cp, info, relaxation, true);
+            setupMultiBodyContactConstraint(rn, dn, zero, cp, info, relaxation, true);
             m_skinContacts.push_back(sc);
             normal.m_frictionIndex = -1;
         }

@@ -45,7 +45,6 @@ pub mod vec_env;
 pub mod world;
 
 pub use config::{Preset, SnakeConfig};
-pub use skin::{SkinAxis, SkinFriction};
 pub use env::{
     ActionConfig, ActionMode, DistancePrecision, EnvConfig, GoalDistribution, Info,
     ObservationLayout, ResetOptions, RewardConfig, RewardTerms, SnakeEnv, StartDistribution,
@@ -55,6 +54,7 @@ pub use error::{Error, Result};
 pub use gait::{Gait, GaitKind, LateralUndulation};
 pub use math::{quaternion_from_euler, StartPose};
 pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, ShapeDrawing, Simulation};
+pub use skin::{SkinAxis, SkinFriction};
 pub use snake::Snake;
 pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};
