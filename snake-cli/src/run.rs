@@ -280,6 +280,13 @@ impl RunPlan {
                         .iter_mut()
                         .for_each(|f| *f = Some(a));
                 }
+                if let Some([f, b, t]) = args.skin_friction {
+                    let skin = SkinFriction {
+                        axis: args.skin_axis,
+                        ..SkinFriction::new(f, b, t)
+                    };
+                    spec.skin_friction.iter_mut().for_each(|s| *s = Some(skin));
+                }
                 if let Some(inertia) = args.inertia {
                     spec.inertia = inertia;
                 }
