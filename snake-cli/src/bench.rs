@@ -8,7 +8,8 @@ use crate::output::say;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::{
-    Gait, LateralUndulation, Preset, Robot, RobotGait, RobotSpec, Simulation, Snake, StartPose,
+    Gait, LateralUndulation, Preset, Robot, RobotGait, RobotSpec, Simulation, SkinFriction, Snake,
+    StartPose,
 };
 
 /// The pybullet side of the benchmark, in the repository this binary was built from.
@@ -43,6 +44,10 @@ pub struct BenchArgs {
     /// both sides replay the same precomputed targets.
     #[arg(long, conflicts_with = "joints")]
     pub robot: Option<PathBuf>,
+    /// Measure the cost of skin friction F,B,T on the built-in snake: runs with and without it,
+    /// alternated, and the ratio of their step times (snakesim only).
+    #[arg(long, conflicts_with = "robot", value_parser = crate::run::parse_skin)]
+    pub skin_friction: Option<[f64; 3]>,
 }
 
 fn median(mut values: Vec<f64>) -> f64 {
@@ -56,8 +61,9 @@ fn median(mut values: Vec<f64>) -> f64 {
 }
 
 /// Steps per second of one run: gait targets, position control and a physics step, as pybullet's loop.
-fn one_run(joints: usize, steps: u64) -> Result<f64> {
-    let config = Preset::Paper.config(joints);
+fn one_run(joints: usize, steps: u64, skin: Option<SkinFriction>) -> Result<f64> {
+    let mut config = Preset::Paper.config(joints);
+    config.skin_friction = skin;
     let mut snake = Snake::new(&config, StartPose::resting(config.half_extent))?;
     let mut gait = LateralUndulation::default();
     let mut targets = vec![0.0; joints];
@@ -270,6 +276,9 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if let Some(path) = &args.robot {
         return bench_robot(args, path);
     }
+    if let Some([f, b, t]) = args.skin_friction {
+        return bench_skin(args, SkinFriction::new(f, b, t));
+    }
     say!(
         "physics steps per second, one core, gait running; median of {} runs of {} steps",
         args.repeats,
@@ -281,7 +290,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         .map(|&j| {
             Ok(median(
                 (0..args.repeats)
-                    .map(|_| one_run(j, args.steps))
+                    .map(|_| one_run(j, args.steps, None))
                     .collect::<Result<_>>()?,
             ))
         })
@@ -322,6 +331,38 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             Some(t) => say!("{joints:>6}  {rate:>16.0}  {t:>16.0}  {:>6.2}x", rate / t)?,
             None => say!("{joints:>6}  {rate:>16.0}  {:>16}  {:>7}", "-", "-")?,
         }
+    }
+    Ok(())
+}
+
+/// Step time with skin friction against without, on the built-in snake and its gait: the runs alternate
+/// (without, with, without, ...) so that a change of machine load hits both alike.
+fn bench_skin(args: &BenchArgs, skin: SkinFriction) -> Result<()> {
+    say!(
+        "physics steps per second, one core, gait running, without and with skin friction {} / {} / {}; \
+         median of {} alternated runs of {} steps",
+        skin.forward,
+        skin.backward,
+        skin.transverse,
+        args.repeats,
+        args.steps
+    )?;
+    say!(
+        "{:>6}  {:>14}  {:>14}  {:>10}",
+        "joints",
+        "without skin",
+        "with skin",
+        "cost ratio"
+    )?;
+    for &joints in &args.joints {
+        let (mut without, mut with) = (Vec::new(), Vec::new());
+        for _ in 0..args.repeats {
+            without.push(one_run(joints, args.steps, None)?);
+            with.push(one_run(joints, args.steps, Some(skin))?);
+        }
+        let (a, b) = (median(without), median(with));
+        // Step cost is the inverse of the rate: cost with / cost without = rate without / rate with.
+        say!("{joints:>6}  {a:>14.0}  {b:>14.0}  {:>9.3}x", a / b)?;
     }
     Ok(())
 }

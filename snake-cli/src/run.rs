@@ -122,7 +122,7 @@ fn parse_friction(text: &str) -> Result<[f64; 3], String> {
     }
 }
 
-fn parse_skin(text: &str) -> Result<[f64; 3], String> {
+pub(crate) fn parse_skin(text: &str) -> Result<[f64; 3], String> {
     let [f, b, t] = parse_numbers::<3>(text, "F,B,T")?;
     SkinFriction::new(f, b, t)
         .validate(&format!("--skin-friction '{text}'"))
@@ -594,7 +594,14 @@ fn summary(
                 spec.urdf.links.len(),
                 body.joints(),
                 spec.inertia
-            )?
+            )?;
+            let skins = spec.skin_friction.iter().flatten().count();
+            if skins > 0 {
+                say!(
+                    "skin friction on {skins} of {} links",
+                    spec.urdf.links.len()
+                )?;
+            }
         }
     }
     say!(
