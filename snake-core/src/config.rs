@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
+use crate::limits::MAX_SKIN_FRICTION;
 use crate::skin::{SkinAxis, SkinFriction};
 
 /// Most joints a snake may have.
@@ -183,8 +184,15 @@ impl SnakeConfig {
         {
             return Err(invalid("anisotropic_friction must be finite and >= 0"));
         }
-        if let Some(skin) = &self.skin_friction {
-            skin.validate("skin_friction")?;
+        // "skin_friction.forward must be ...": a field path, as env configs name their keys.
+        if let Some((name, value)) = self
+            .skin_friction
+            .as_ref()
+            .and_then(SkinFriction::first_bad)
+        {
+            return Err(invalid(format!(
+                "skin_friction.{name} must be finite and in [0, {MAX_SKIN_FRICTION}], got {value:?}"
+            )));
         }
         Ok(())
     }

@@ -117,21 +117,26 @@ impl SkinFriction {
         }
     }
 
-    /// Checks the coefficients against `[0, MAX_SKIN_FRICTION]`; the error starts with `what` (a flag
-    /// or a file and key).
-    pub fn validate(&self, what: &str) -> Result<()> {
-        for (name, value) in [
+    /// The first coefficient outside `[0, MAX_SKIN_FRICTION]` (or not finite), by name and value.
+    pub fn first_bad(&self) -> Option<(&'static str, f64)> {
+        [
             ("forward", self.forward),
             ("backward", self.backward),
             ("transverse", self.transverse),
-        ] {
-            if !(value.is_finite() && (0.0..=MAX_SKIN_FRICTION).contains(&value)) {
-                return Err(invalid(format!(
-                    "{what}: {name} must be finite and in [0, {MAX_SKIN_FRICTION}], got {value:?}"
-                )));
-            }
+        ]
+        .into_iter()
+        .find(|(_, value)| !(value.is_finite() && (0.0..=MAX_SKIN_FRICTION).contains(value)))
+    }
+
+    /// Checks the coefficients against `[0, MAX_SKIN_FRICTION]`; the error starts with `what` (a flag
+    /// or a file and key).
+    pub fn validate(&self, what: &str) -> Result<()> {
+        match self.first_bad() {
+            Some((name, value)) => Err(invalid(format!(
+                "{what}: {name} must be finite and in [0, {MAX_SKIN_FRICTION}], got {value:?}"
+            ))),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// The axis vector in the link frame, `default` when none is set.
