@@ -173,3 +173,59 @@ fn isotropic_skin_loses_the_gaits_progress() {
         "isotropic skin {isotropic} m against anisotropic {anisotropic} m"
     );
 }
+
+/// The native trainer's side: a run config's `env.snake.skin_friction` reaches the env it builds, its
+/// YAML round trip keeps it, and a saved policy's metadata (what evaluate and replay rebuild the env
+/// from) carries it.
+#[test]
+fn run_configs_and_saved_policies_carry_skin_friction() {
+    use snake_rl::config::RunConfig;
+    use snake_rl::model::{load_policy, save_policy, SavedPolicy};
+    use snake_rl::nn::{ActorCritic, Arch};
+
+    let skin = SkinFriction {
+        axis: Some(SkinAxis::NegY),
+        ..SkinFriction::new(0.05, 0.1, 5.0)
+    };
+    let run = RunConfig::from_yaml(
+        "joints: 4\nenv:\n  snake:\n    skin_friction: {forward: 0.05, backward: 0.1, transverse: 5, axis: -y}\n",
+    )
+    .unwrap();
+    assert_eq!(run.env_config().unwrap().snake.skin_friction, Some(skin));
+    let again = RunConfig::from_yaml(&run.to_yaml()).unwrap();
+    assert_eq!(again.env_config().unwrap().snake.skin_friction, Some(skin));
+
+    let spec = snake_rl::model::EnvSpec {
+        joints: run.joints,
+        preset: run.preset,
+        env: run.env.clone(),
+    };
+    let config = spec.config().unwrap();
+    let net = ActorCritic::new(Arch::Small, config.observation_dim(), config.action_dim());
+    let policy = SavedPolicy {
+        params: vec![0.0; net.len()],
+        net,
+        obs_rms: None,
+        env: spec,
+        timesteps: 0,
+    };
+    let dir = std::env::temp_dir().join(format!("snakesim-skin-model-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("model.safetensors");
+    save_policy(&path, &policy).unwrap();
+    let loaded = load_policy(&path).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(loaded.env.config().unwrap().snake.skin_friction, Some(skin));
+    assert_eq!(loaded, policy);
+
+    let bad = RunConfig::from_yaml(
+        "env:\n  snake:\n    skin_friction: {forward: 0.05, backward: -1, transverse: 5}\n",
+    )
+    .and_then(|r| r.env_config())
+    .unwrap_err()
+    .to_string();
+    assert_eq!(
+        bad,
+        "env.snake.skin_friction.backward: must be finite and in [0, 10], got -1.0"
+    );
+}
