@@ -72,6 +72,266 @@ struct OrFilterCallback : public btOverlapFilterCallback {
 
 bool finite3(const double* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
+// ---- Skin friction (issue 27): Hu et al.'s forward/backward/transverse law inside the contact solver ----
+//
+// Bullet builds two friction rows per contact (directions btPlaneSpace1 of the normal) and clamps their
+// pair against a circular cone each iteration. For a contact of a link with skin friction, SkinSolver
+// takes that pair out of Bullet's friction array after Bullet's setup, rebuilds its two rows along
+// t (the skin axis projected into the contact plane) and n (in the plane, normal to t), and solves them
+// after Bullet's own rows in every iteration with the law's force set (see solve_skin_contact). Before
+// Bullet's finish the pairs go back into its array, so that the write-back (constraint forces, the
+// contact point's lateral impulses) sees them as ordinary rows. A solve with no skin contact makes
+// exactly Bullet's calls in Bullet's order: worlds without skin friction keep pybullet parity.
+
+struct Skin {
+    double forward, backward, transverse;
+    btVector3 axis;  // unit, in the collider's (centre-of-mass) frame
+};
+
+class SkinSolver : public btMultiBodyConstraintSolver {
+public:
+    explicit SkinSolver(const std::vector<Skin>* skins) : m_skins(skins) {}
+
+protected:
+    // One skin contact: its normal row and its coefficients, already combined with the other object's
+    // friction. Its two friction rows are m_skinRows[2k] (along t) and [2k + 1] (along n).
+    struct SkinContact {
+        int normal;
+        btScalar forward, backward, transverse;
+    };
+    const std::vector<Skin>* m_skins;
+    btAlignedObjectArray<btMultiBodySolverConstraint> m_skinRows;
+    std::vector<SkinContact> m_skinContacts;
+
+    const Skin* skin_of(const btMultiBody* mb, int link, const btCollisionObject** col_out) const {
+        if (!mb) return nullptr;
+        const btCollisionObject* col =
+            link < 0 ? (const btCollisionObject*)mb->getBaseCollider() : (const btCollisionObject*)mb->getLinkCollider(link);
+        *col_out = col;
+        if (!col) return nullptr;
+        int index = col->getUserIndex3();
+        if (index < 0 || index >= (int)m_skins->size()) return nullptr;
+        return &(*m_skins)[index];
+    }
+
+    // The lateral friction of the object on side A (b = false) or B (true) of a row.
+    btScalar side_friction(const btMultiBodySolverConstraint& c, bool b) const {
+        const btMultiBody* mb = b ? c.m_multiBodyB : c.m_multiBodyA;
+        int link = b ? c.m_linkB : c.m_linkA;
+        if (mb) {
+            const btCollisionObject* col = link < 0 ? (const btCollisionObject*)mb->getBaseCollider()
+                                                    : (const btCollisionObject*)mb->getLinkCollider(link);
+            return col ? col->getFriction() : btScalar(1);
+        }
+        int id = b ? c.m_solverBodyIdB : c.m_solverBodyIdA;
+        if (id >= 0 && m_tmpSolverBodyPool[id].m_originalBody) return m_tmpSolverBodyPool[id].m_originalBody->getFriction();
+        return btScalar(1);
+    }
+
+    btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
+                                          int numManifolds, btTypedConstraint** constraints, int numConstraints,
+                                          const btContactSolverInfo& info, btIDebugDraw* debug) override {
+        btScalar result = btMultiBodyConstraintSolver::solveGroupCacheFriendlySetup(
+            bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info, debug);
+        m_skinRows.resize(0);
+        m_skinContacts.clear();
+        if (m_skins->empty()) return result;
+        // The pairing below needs Bullet's two friction rows per contact in the cone mode pybullet uses.
+        if (!(info.m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS) || (info.m_solverMode & SOLVER_DISABLE_IMPLICIT_CONE_FRICTION))
+            return result;
+        btMultiBodyConstraintArray& friction = m_multiBodyFrictionContactConstraints;
+        int write = 0;
+        for (int i = 0; i < m_multiBodyNormalContactConstraints.size(); ++i) {
+            btMultiBodySolverConstraint& normal = m_multiBodyNormalContactConstraints[i];
+            const int f = normal.m_frictionIndex;
+            const btMultiBodySolverConstraint& row = friction[f];
+            const btCollisionObject* col = nullptr;
+            const Skin* skin = skin_of(row.m_multiBodyA, row.m_linkA, &col);
+            btScalar side = 1;  // +1: the skin link is body A of the rows
+            if (!skin) {
+                skin = skin_of(row.m_multiBodyB, row.m_linkB, &col);
+                side = -1;
+            }
+            if (!skin) {
+                // Not a skin contact: the pair moves down to close the gaps, in Bullet's order.
+                if (write != f) {
+                    friction[write] = friction[f];
+                    friction[write + 1] = friction[f + 1];
+                }
+                normal.m_frictionIndex = write;
+                write += 2;
+                continue;
+            }
+            btManifoldPoint& cp = *(btManifoldPoint*)row.m_originalContactPoint;
+            const btScalar other = side_friction(row, side > 0);
+            auto combine = [&](double mu) { return btMin(btScalar(mu) * other, btScalar(10)); };
+            SkinContact sc{i, combine(skin->forward), combine(skin->backward), combine(skin->transverse)};
+            m_skinRows.push_back(friction[f]);
+            m_skinRows.push_back(friction[f + 1]);
+            btMultiBodySolverConstraint& rt = m_skinRows[m_skinRows.size() - 2];
+            btMultiBodySolverConstraint& rn = m_skinRows[m_skinRows.size() - 1];
+            const btVector3& normal_dir = cp.m_normalWorldOnB;
+            btVector3 axis = col->getWorldTransform().getBasis() * skin->axis;
+            btVector3 t = axis - normal_dir * axis.dot(normal_dir);
+            // |t| is the sine of the angle between the skin axis and the contact normal. Where the axis
+            // leaves the contact plane, the forward/backward coefficients blend into the transverse one in
+            // proportion to it: the law as written (t normalised) would switch between them at random
+            // when the axis is normal to the plane, where every in-plane direction is transverse. For a
+            // link lying on the ground |t| is 1 and the law holds as written.
+            const btScalar w = btMin(t.length(), btScalar(1));
+            sc.forward = sc.transverse + (sc.forward - sc.transverse) * w;
+            sc.backward = sc.transverse + (sc.backward - sc.transverse) * w;
+            if (!(w > btScalar(1e-9))) {
+                btVector3 other_dir;
+                btPlaneSpace1(normal_dir, t, other_dir);
+            }
+            // Rows along side * t and the normal to it: a positive impulse is then a force on the skin link
+            // along +t (or +n), and the row's velocity is the skin's sliding velocity along it.
+            t.normalize();
+            const btVector3 dt = t * side;
+            const btVector3 dn = normal_dir.cross(dt);
+            btScalar relaxation;
+            const btScalar zero = 0;
+            setupMultiBodyContactConstraint(rt, dt, zero, cp, info, relaxation, true);
+            setupMultiBodyContactConstraint(rn, dn, zero, cp, info, relaxation, true);
+            m_skinContacts.push_back(sc);
+            normal.m_frictionIndex = -1;
+        }
+        friction.resize(write);
+        return result;
+    }
+
+    // Velocity along row c produced by the impulses applied so far in this solve.
+    btScalar row_delta_velocity(const btMultiBodySolverConstraint& c) {
+        btScalar v = 0;
+        if (c.m_multiBodyA) {
+            const int n = c.m_multiBodyA->getNumDofs() + 6;
+            for (int i = 0; i < n; ++i) v += m_data.m_jacobians[c.m_jacAindex + i] * m_data.m_deltaVelocities[c.m_deltaVelAindex + i];
+        } else if (c.m_solverBodyIdA >= 0) {
+            btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdA];
+            v += c.m_contactNormal1.dot(b.internalGetDeltaLinearVelocity()) + c.m_relpos1CrossNormal.dot(b.internalGetDeltaAngularVelocity());
+        }
+        if (c.m_multiBodyB) {
+            const int n = c.m_multiBodyB->getNumDofs() + 6;
+            for (int i = 0; i < n; ++i) v += m_data.m_jacobians[c.m_jacBindex + i] * m_data.m_deltaVelocities[c.m_deltaVelBindex + i];
+        } else if (c.m_solverBodyIdB >= 0) {
+            btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
+            v += c.m_contactNormal2.dot(b.internalGetDeltaLinearVelocity()) + c.m_relpos2CrossNormal.dot(b.internalGetDeltaAngularVelocity());
+        }
+        return v;
+    }
+
+    void apply_row_impulse(const btMultiBodySolverConstraint& c, btScalar impulse) {
+        if (c.m_multiBodyA) {
+            const int n = c.m_multiBodyA->getNumDofs() + 6;
+            applyDeltaVee(&m_data.m_deltaVelocitiesUnitImpulse[c.m_jacAindex], impulse, c.m_deltaVelAindex, n);
+            c.m_multiBodyA->applyDeltaVeeMultiDof2(&m_data.m_deltaVelocitiesUnitImpulse[c.m_jacAindex], impulse);
+            c.m_multiBodyA->setPosUpdated(false);
+        } else if (c.m_solverBodyIdA >= 0) {
+            btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdA];
+            b.internalApplyImpulse(c.m_contactNormal1 * b.internalGetInvMass(), c.m_angularComponentA, impulse);
+        }
+        if (c.m_multiBodyB) {
+            const int n = c.m_multiBodyB->getNumDofs() + 6;
+            applyDeltaVee(&m_data.m_deltaVelocitiesUnitImpulse[c.m_jacBindex], impulse, c.m_deltaVelBindex, n);
+            c.m_multiBodyB->applyDeltaVeeMultiDof2(&m_data.m_deltaVelocitiesUnitImpulse[c.m_jacBindex], impulse);
+            c.m_multiBodyB->setPosUpdated(false);
+        } else if (c.m_solverBodyIdB >= 0) {
+            btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
+            b.internalApplyImpulse(c.m_contactNormal2 * b.internalGetInvMass(), c.m_angularComponentB, impulse);
+        }
+    }
+
+    // The friction impulse of one skin contact for this iteration. With st, sn the impulses (force on the
+    // skin link along t and n) that would stop the contact, each with its row's own effective mass as
+    // Bullet's rows use it:
+    // - sticking, when (st, sn) lies in the law's force set (the half ellipse (st / (mu_f N))^2 +
+    //   (sn / (mu_t N))^2 <= 1 for st <= 0, with mu_b for st > 0): the impulse is (st, sn);
+    // - sliding otherwise: the impulse -N (mu_a u_t, mu_t u_n) of the law at the sliding direction u that
+    //   it itself produces, u = K (impulse - (st, sn)) / |...| with K the rows' inverse effective masses.
+    //   Writing u_i = -a_i / (s + b_i) (a_i = K_i s_i, b_i = K_i mu_i N) turns that into one equation,
+    //   sum_i (a_i / (s + b_i))^2 = 1 for s >= 0, convex and decreasing in s, which Newton's method solves
+    //   from below. The result is continuous at the stick/slip boundary, equals Coulomb's clamp when the
+    //   contact slides along t or n, and Bullet's cone clamp when the skin is isotropic and the two rows
+    //   have equal effective masses.
+    btScalar solve_skin_contact(int k) {
+        btMultiBodySolverConstraint& rt = m_skinRows[2 * k];
+        btMultiBodySolverConstraint& rn = m_skinRows[2 * k + 1];
+        const SkinContact& sc = m_skinContacts[k];
+        const btScalar N = m_multiBodyNormalContactConstraints[sc.normal].m_appliedImpulse;
+        const btScalar st = rt.m_appliedImpulse + rt.m_rhs - rt.m_appliedImpulse * rt.m_cfm - row_delta_velocity(rt) * rt.m_jacDiagABInv;
+        const btScalar sn = rn.m_appliedImpulse + rn.m_rhs - rn.m_appliedImpulse * rn.m_cfm - row_delta_velocity(rn) * rn.m_jacDiagABInv;
+        const btScalar ma = (st < 0 ? sc.forward : sc.backward) * btMax(N, btScalar(0));
+        const btScalar mn = sc.transverse * btMax(N, btScalar(0));
+        btScalar lt = 0, ln = 0;
+        if (!(N > 0) || (ma == 0 && mn == 0)) {
+            // No normal impulse or no friction: no friction impulse.
+        } else if (st * st * mn * mn + sn * sn * ma * ma <= ma * ma * mn * mn) {
+            lt = st;
+            ln = sn;
+        } else if (!(rt.m_jacDiagABInv > 0) || !(rn.m_jacDiagABInv > 0)) {
+            // A row Bullet disabled (no effective mass): each row clamped on its own.
+            lt = btMax(-ma, btMin(st, ma));
+            ln = btMax(-mn, btMin(sn, mn));
+        } else {
+            const btScalar a[2] = {st / rt.m_jacDiagABInv, sn / rn.m_jacDiagABInv};
+            const btScalar b[2] = {ma / rt.m_jacDiagABInv, mn / rn.m_jacDiagABInv};
+            btScalar s = 0;
+            for (int i = 0; i < 2; ++i) s = btMax(s, btFabs(a[i]) - b[i]);
+            for (int it = 0; it < 60; ++it) {
+                btScalar h = -1, dh = 0;
+                for (int i = 0; i < 2; ++i) {
+                    if (a[i] == 0) continue;
+                    btScalar q = a[i] / (s + b[i]);
+                    h += q * q;
+                    dh -= 2 * q * q / (s + b[i]);
+                }
+                if (!(h > 0) || !(dh < 0)) break;
+                btScalar step = -h / dh;
+                s += step;
+                if (step <= btScalar(1e-14) * s) break;
+            }
+            const btScalar ut = a[0] == 0 ? btScalar(0) : -a[0] / (s + b[0]);
+            const btScalar un = a[1] == 0 ? btScalar(0) : -a[1] / (s + b[1]);
+            lt = -ma * ut;
+            ln = -mn * un;
+        }
+        const btScalar dt = lt - rt.m_appliedImpulse;
+        const btScalar dn = ln - rn.m_appliedImpulse;
+        rt.m_appliedImpulse = lt;
+        rn.m_appliedImpulse = ln;
+        apply_row_impulse(rt, dt);
+        apply_row_impulse(rn, dn);
+        btScalar residual = 0;
+        if (rt.m_jacDiagABInv > 0) residual += dt / rt.m_jacDiagABInv;
+        if (rn.m_jacDiagABInv > 0) residual += dn / rn.m_jacDiagABInv;
+        return residual * residual;
+    }
+
+    btScalar solveSingleIteration(int iteration, btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
+                                  int numManifolds, btTypedConstraint** constraints, int numConstraints,
+                                  const btContactSolverInfo& info, btIDebugDraw* debug) override {
+        btScalar residual = btMultiBodyConstraintSolver::solveSingleIteration(
+            iteration, bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info, debug);
+        // Bullet solves its friction rows only in the first m_numIterations iterations; so do these.
+        if (iteration < info.m_numIterations)
+            for (int k = 0; k < (int)m_skinContacts.size(); ++k) residual = btMax(residual, solve_skin_contact(k));
+        return residual;
+    }
+
+    btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies, const btContactSolverInfo& info) override {
+        btMultiBodyConstraintArray& friction = m_multiBodyFrictionContactConstraints;
+        for (int k = 0; k < (int)m_skinContacts.size(); ++k) {
+            m_multiBodyNormalContactConstraints[m_skinContacts[k].normal].m_frictionIndex = friction.size();
+            friction.push_back(m_skinRows[2 * k]);
+            friction.push_back(m_skinRows[2 * k + 1]);
+        }
+        m_skinRows.resize(0);
+        m_skinContacts.clear();
+        return btMultiBodyConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, info);
+    }
+};
+
 }  // namespace
 
 struct ss_world {
@@ -81,7 +341,8 @@ struct ss_world {
     std::unique_ptr<OrFilterCallback> filter;
     std::unique_ptr<btHashedOverlappingPairCache> pair_cache;
     std::unique_ptr<btDbvtBroadphase> broadphase;
-    std::unique_ptr<btMultiBodyConstraintSolver> solver;
+    std::vector<Skin> skins;  // before the solver, which reads it
+    std::unique_ptr<SkinSolver> solver;
     std::unique_ptr<btMultiBodyDynamicsWorld> world;
     // Heightfield samples, which their btHeightfieldTerrainShape reads in place: declared before the
     // shapes so that they outlive them.
@@ -90,6 +351,9 @@ struct ss_world {
     std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
     std::vector<std::unique_ptr<btMultiBodyConstraint>> constraints;
     std::vector<std::unique_ptr<btMultiBody>> bodies;
+    // Per body, the basis of each link's inertial frame in its link frame (base first); empty when every
+    // inertial frame is the link frame (createMultiBody bodies). Skin axes are given in link frames.
+    std::vector<std::vector<btMatrix3x3>> inertial_bases;
     btScalar dt = btScalar(1.) / btScalar(240.);
 
     ~ss_world() {
@@ -244,6 +508,7 @@ int build_multibody(ss_world* w, btCollisionShape* shape, double base_mass, cons
 
     *body_out = (int)w->bodies.size();
     w->bodies.push_back(std::move(mb));
+    w->inertial_bases.emplace_back();
     return SS_OK;
 }
 
@@ -570,6 +835,9 @@ int build_urdf(ss_world* w, const ss_urdf_desc* d, int* body_out) {
 
     *body_out = (int)w->bodies.size();
     w->bodies.push_back(std::move(owned));
+    std::vector<btMatrix3x3> bases;
+    for (const btTransform& tr : inertial_frames) bases.push_back(tr.getBasis());
+    w->inertial_bases.push_back(std::move(bases));
     return SS_OK;
 }
 }  // namespace
@@ -597,7 +865,7 @@ ss_world* ss_world_new(void) {
         w->pair_cache->setOverlapFilterCallback(w->filter.get());
         w->broadphase.reset(new btDbvtBroadphase(w->pair_cache.get()));
         w->broadphase->setVelocityPrediction(0);
-        w->solver.reset(new btMultiBodyConstraintSolver());
+        w->solver.reset(new SkinSolver(&w->skins));
         w->world.reset(new btMultiBodyDynamicsWorld(w->dispatcher.get(), w->broadphase.get(), w->solver.get(),
                                                     w->config.get()));
         btMultiBodyDynamicsWorld* world = w->world.get();
@@ -806,6 +1074,36 @@ int ss_change_dynamics(ss_world* w, int body, int link, const ss_dynamics* d) {
             col->setAnisotropicFriction(
                 btVector3(d->anisotropic_friction[0], d->anisotropic_friction[1], d->anisotropic_friction[2]));
         }
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_set_skin_friction(ss_world* w, int body, int link, double forward, double backward, double transverse,
+                         const double* axis) {
+    if (!w || !axis) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    for (double mu : {forward, backward, transverse})
+        if (!std::isfinite(mu) || mu < 0) return fail(SS_ERR_ARGUMENT, "skin friction coefficients must be finite and >= 0");
+    if (!finite3(axis)) return fail(SS_ERR_ARGUMENT, "skin axis must be finite");
+    btVector3 a(axis[0], axis[1], axis[2]);
+    if (!(a.length2() > 0)) return fail(SS_ERR_ARGUMENT, "skin axis must not be zero");
+    SS_GUARD_BEGIN
+    btCollisionObject* col = link == -1 ? (btCollisionObject*)mb->getBaseCollider() : (btCollisionObject*)mb->getLinkCollider(link);
+    if (!col) return fail(SS_ERR_LINK, "link has no collision shape");
+    a.normalize();
+    // From the link frame into the collider's (centre-of-mass) frame.
+    const std::vector<btMatrix3x3>& bases = w->inertial_bases[body];
+    if (!bases.empty()) a = bases[link + 1].transpose() * a;
+    Skin skin{forward, backward, transverse, a};
+    int index = col->getUserIndex3();
+    if (index >= 0 && index < (int)w->skins.size()) {
+        w->skins[index] = skin;
+    } else {
+        col->setUserIndex3((int)w->skins.size());
+        w->skins.push_back(skin);
     }
     return SS_OK;
     SS_GUARD_END

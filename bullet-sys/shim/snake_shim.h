@@ -199,6 +199,21 @@ int ss_body_num_joints(const ss_world* world, int body, int* count);
 /* changeDynamics(body, link, ...); link -1 is the base. */
 int ss_change_dynamics(ss_world* world, int body, int link, const ss_dynamics* dynamics);
 
+/* Skin friction (Hu, Nirody, Scott and Shelley 2009) on link `link` (-1: the base) of `body`: a contact
+ * of that link sliding with unit velocity u (relative to the other object, in the contact plane) gets the
+ * friction force -N (mu_t (u.n) n + mu_a (u.t) t), t the skin axis projected into the contact plane, n the
+ * in-plane normal to t, mu_a = forward when u.t > 0 (sliding head first), backward otherwise; a sticking
+ * contact gets any force inside the set that law allows (a half ellipse of semi-axes mu_f N and mu_t N
+ * behind, one of mu_b N and mu_t N ahead). Where the axis leaves the contact plane, forward and backward
+ * blend into transverse in proportion to the sine of its angle with the normal (all transverse when the
+ * axis is normal to the plane, where the law leaves t undefined). Each coefficient is multiplied by the other object's lateral
+ * friction (clamped to 10, as Bullet combines lateral friction). The link's own lateral and anisotropic
+ * friction no longer act on its contacts (rolling and spinning friction do). `axis` is the head direction
+ * in the link frame (for a URDF link, its <link> frame, not its inertial frame); it must be non-zero.
+ * Coefficients must be finite and >= 0. Worlds without skin friction step exactly as before. */
+int ss_set_skin_friction(ss_world* world, int body, int link, double forward, double backward, double transverse,
+                         const double* axis);
+
 /* setJointMotorControl2(body, joint, mode, targetPosition, targetVelocity, force, positionGain,
  * velocityGain, maxVelocity); max_velocity <= 0 means "not given". For SS_TORQUE_CONTROL, force is the
  * torque added until the end of the next step. */

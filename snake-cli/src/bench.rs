@@ -8,8 +8,8 @@ use crate::output::say;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::{
-    Gait, LateralUndulation, Preset, Robot, RobotGait, RobotSpec, Simulation, Snake, StartPose,
-    WorldSpec,
+    Gait, LateralUndulation, Preset, Robot, RobotGait, RobotSpec, Simulation, SkinFriction, Snake,
+    StartPose, WorldSpec,
 };
 
 /// The pybullet side of the benchmark, in the repository this binary was built from.
@@ -46,8 +46,12 @@ pub struct BenchArgs {
     pub robot: Option<PathBuf>,
     /// Measure the built-in snake on this world file beside the flat plane, in the same run
     /// (interleaved runs; pybullet is not measured): steps/s on each and their ratio.
-    #[arg(long, conflicts_with_all = ["robot", "python"])]
+    #[arg(long, conflicts_with_all = ["robot", "python", "skin_friction"])]
     pub world: Option<PathBuf>,
+    /// Measure the cost of skin friction F,B,T on the built-in snake: runs with and without it,
+    /// alternated, and the ratio of their step times (snakesim only).
+    #[arg(long, conflicts_with = "robot", value_parser = crate::run::parse_skin)]
+    pub skin_friction: Option<[f64; 3]>,
 }
 
 fn median(mut values: Vec<f64>) -> f64 {
@@ -61,13 +65,19 @@ fn median(mut values: Vec<f64>) -> f64 {
 }
 
 /// Steps per second of one run: gait targets, position control and a physics step, as pybullet's loop.
-fn one_run(joints: usize, steps: u64) -> Result<f64> {
-    one_run_in(joints, steps, &WorldSpec::default())
+fn one_run(joints: usize, steps: u64, skin: Option<SkinFriction>) -> Result<f64> {
+    one_run_in(joints, steps, skin, &WorldSpec::default())
 }
 
 /// [`one_run`] on a world, the snake's start raised as `snake-cli run` raises it.
-fn one_run_in(joints: usize, steps: u64, world: &WorldSpec) -> Result<f64> {
-    let config = Preset::Paper.config(joints);
+fn one_run_in(
+    joints: usize,
+    steps: u64,
+    skin: Option<SkinFriction>,
+    world: &WorldSpec,
+) -> Result<f64> {
+    let mut config = Preset::Paper.config(joints);
+    config.skin_friction = skin;
     let mut start = StartPose::resting(config.half_extent);
     start.z += world.ground_top((joints as f64 + 0.5) * config.link_spacing() + config.half_extent);
     let mut snake = Snake::in_world(&config, start, world)?;
@@ -285,6 +295,9 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if let Some(path) = &args.world {
         return bench_world(args, path);
     }
+    if let Some([f, b, t]) = args.skin_friction {
+        return bench_skin(args, SkinFriction::new(f, b, t));
+    }
     say!(
         "physics steps per second, one core, gait running; median of {} runs of {} steps",
         args.repeats,
@@ -296,7 +309,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         .map(|&j| {
             Ok(median(
                 (0..args.repeats)
-                    .map(|_| one_run(j, args.steps))
+                    .map(|_| one_run(j, args.steps, None))
                     .collect::<Result<_>>()?,
             ))
         })
@@ -371,11 +384,43 @@ fn bench_world(args: &BenchArgs, path: &Path) -> Result<()> {
     for &joints in &args.joints {
         let (mut on_flat, mut on_world) = (Vec::new(), Vec::new());
         for _ in 0..args.repeats {
-            on_flat.push(one_run(joints, args.steps)?);
-            on_world.push(one_run_in(joints, args.steps, &world)?);
+            on_flat.push(one_run(joints, args.steps, None)?);
+            on_world.push(one_run_in(joints, args.steps, None, &world)?);
         }
         let (f, w) = (median(on_flat), median(on_world));
         say!("{joints:>6}  {f:>16.0}  {w:>16.0}  {:>6.2}x", w / f)?;
+    }
+    Ok(())
+}
+
+/// Step time with skin friction against without, on the built-in snake and its gait: the runs alternate
+/// (without, with, without, ...) so that a change of machine load hits both alike.
+fn bench_skin(args: &BenchArgs, skin: SkinFriction) -> Result<()> {
+    say!(
+        "physics steps per second, one core, gait running, without and with skin friction {} / {} / {}; \
+         median of {} alternated runs of {} steps",
+        skin.forward,
+        skin.backward,
+        skin.transverse,
+        args.repeats,
+        args.steps
+    )?;
+    say!(
+        "{:>6}  {:>14}  {:>14}  {:>10}",
+        "joints",
+        "without skin",
+        "with skin",
+        "cost ratio"
+    )?;
+    for &joints in &args.joints {
+        let (mut without, mut with) = (Vec::new(), Vec::new());
+        for _ in 0..args.repeats {
+            without.push(one_run(joints, args.steps, None)?);
+            with.push(one_run(joints, args.steps, Some(skin))?);
+        }
+        let (a, b) = (median(without), median(with));
+        // Step cost is the inverse of the rate: cost with / cost without = rate without / rate with.
+        say!("{joints:>6}  {a:>14.0}  {b:>14.0}  {:>9.3}x", a / b)?;
     }
     Ok(())
 }

@@ -14,7 +14,7 @@ use clap::Args;
 use snake_core::urdf::Geometry;
 use snake_core::{
     Gait, GaitChoice, GaitKind, InertiaSource, JointRoles, LateralUndulation, Preset, Robot,
-    RobotGait, RobotSpec, Simulation, Snake, SnakeConfig, StartPose,
+    RobotGait, RobotSpec, Simulation, SkinAxis, SkinFriction, Snake, SnakeConfig, StartPose,
 };
 use snake_core::{WorldRef, WorldSpec};
 
@@ -68,6 +68,15 @@ pub struct RunArgs {
     /// changeDynamics(anisotropicFriction=...)); replaces the robot file's.
     #[arg(long, requires = "robot", value_parser = parse_friction)]
     pub anisotropic_friction: Option<[f64; 3]>,
+    /// Skin friction F,B,T (forward, backward, transverse; Hu et al. 2009) of every cube or robot link,
+    /// in place of their lateral and anisotropic friction; each is multiplied by the ground's friction
+    /// (pybullet's 1). For a robot it replaces the robot file's skin_friction.
+    #[arg(long, value_parser = parse_skin)]
+    pub skin_friction: Option<[f64; 3]>,
+    /// Head direction of the skin in each link's frame: x, -x, y, -y, z or -z. Default: the built-in
+    /// snake's head direction (-y); for a robot, its robot file's skin axis, else x.
+    #[arg(long, requires = "skin_friction", allow_hyphen_values = true)]
+    pub skin_axis: Option<SkinAxis>,
     /// Where the robot's link inertias come from: shapes (pybullet's default) or file
     /// (URDF_USE_INERTIA_FROM_FILE). Default: the robot file's, else shapes.
     #[arg(long, requires = "robot")]
@@ -127,6 +136,14 @@ fn parse_friction(text: &str) -> Result<[f64; 3], String> {
             "'{text}': anisotropic friction must be finite and >= 0"
         ))
     }
+}
+
+pub(crate) fn parse_skin(text: &str) -> Result<[f64; 3], String> {
+    let [f, b, t] = parse_numbers::<3>(text, "F,B,T")?;
+    SkinFriction::new(f, b, t)
+        .validate(&format!("--skin-friction '{text}'"))
+        .map_err(|e| e.to_string())?;
+    Ok([f, b, t])
 }
 
 /// What is simulated.
@@ -312,7 +329,11 @@ impl RunPlan {
                 if args.joints < 1 {
                     bail!("--joints must be at least 1, got {}", args.joints);
                 }
-                let config = args.preset.config(args.joints);
+                let mut config = args.preset.config(args.joints);
+                config.skin_friction = args.skin_friction.map(|[f, b, t]| SkinFriction {
+                    axis: args.skin_axis,
+                    ..SkinFriction::new(f, b, t)
+                });
                 config.validate()?;
                 BodyPlan::Cubes {
                     config,
@@ -325,6 +346,13 @@ impl RunPlan {
                     spec.anisotropic_friction
                         .iter_mut()
                         .for_each(|f| *f = Some(a));
+                }
+                if let Some([f, b, t]) = args.skin_friction {
+                    let skin = SkinFriction {
+                        axis: args.skin_axis,
+                        ..SkinFriction::new(f, b, t)
+                    };
+                    spec.skin_friction.iter_mut().for_each(|s| *s = Some(skin));
                 }
                 if let Some(inertia) = args.inertia {
                     spec.inertia = inertia;
@@ -732,13 +760,24 @@ fn summary(
     let moved = end.position - start_position;
     let distance = moved.xy().norm();
     match (&plan.body, &plan.drive) {
-        (BodyPlan::Cubes { config, preset }, _) => say!(
-            "snake: {} joints ({} cubes), preset {preset}, gait {}, steering {}",
-            config.joints,
-            config.joints + 1,
-            plan.gait,
-            plan.steer
-        )?,
+        (BodyPlan::Cubes { config, preset }, _) => {
+            say!(
+                "snake: {} joints ({} cubes), preset {preset}, gait {}, steering {}",
+                config.joints,
+                config.joints + 1,
+                plan.gait,
+                plan.steer
+            )?;
+            if let Some(skin) = &config.skin_friction {
+                say!(
+                    "skin friction: forward {}, backward {}, transverse {}, axis {}",
+                    skin.forward,
+                    skin.backward,
+                    skin.transverse,
+                    skin.axis.unwrap_or(SnakeConfig::HEAD_AXIS)
+                )?;
+            }
+        }
         (BodyPlan::Robot(spec), drive) => {
             let how = match drive {
                 Drive::Gait(_) => format!("gait {}, steering {}", plan.gait, plan.steer),
@@ -751,7 +790,14 @@ fn summary(
                 spec.urdf.links.len(),
                 body.joints(),
                 spec.inertia
-            )?
+            )?;
+            let skins = spec.skin_friction.iter().flatten().count();
+            if skins > 0 {
+                say!(
+                    "skin friction on {skins} of {} links",
+                    spec.urdf.links.len()
+                )?;
+            }
         }
     }
     say!(

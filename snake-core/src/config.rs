@@ -3,6 +3,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
+use crate::limits::MAX_SKIN_FRICTION;
+use crate::skin::{SkinAxis, SkinFriction};
 
 /// Most joints a snake may have.
 pub const MAX_JOINTS: usize = 512;
@@ -38,6 +40,10 @@ pub struct SnakeConfig {
     pub gravity: f64,
     /// Physics time step, seconds.
     pub dt: f64,
+    /// Skin friction of every cube (issue 27), replacing its lateral and anisotropic friction; `None`
+    /// (the default) keeps pybullet's friction. The default axis is the head direction, -y.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin_friction: Option<SkinFriction>,
 }
 
 impl Default for SnakeConfig {
@@ -87,6 +93,7 @@ impl Preset {
             velocity_gain: 1.0,
             gravity: -9.81,
             dt: 1.0 / 240.0,
+            skin_friction: None,
         }
     }
 }
@@ -118,6 +125,10 @@ impl SnakeConfig {
         // Computed as the reference code writes it: half extent * 2.0 + gap.
         self.half_extent * 2.0 + self.link_gap
     }
+
+    /// The head direction of every cube in its own frame: the base is the head and the links follow
+    /// along +y, so the head points along -y.
+    pub const HEAD_AXIS: SkinAxis = SkinAxis::NegY;
 
     /// Checks every parameter; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
@@ -172,6 +183,16 @@ impl SnakeConfig {
             .all(|a| a.is_finite() && *a >= 0.0)
         {
             return Err(invalid("anisotropic_friction must be finite and >= 0"));
+        }
+        // "skin_friction.forward must be ...": a field path, as env configs name their keys.
+        if let Some((name, value)) = self
+            .skin_friction
+            .as_ref()
+            .and_then(SkinFriction::first_bad)
+        {
+            return Err(invalid(format!(
+                "skin_friction.{name} must be finite and in [0, {MAX_SKIN_FRICTION}], got {value:?}"
+            )));
         }
         Ok(())
     }

@@ -41,6 +41,7 @@ pub mod gait;
 pub mod limits;
 pub mod math;
 pub mod robot;
+pub mod skin;
 pub mod snake;
 pub mod urdf;
 pub mod vec_env;
@@ -60,6 +61,7 @@ pub use gait::{
 };
 pub use math::{quaternion_from_euler, StartPose};
 pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, ShapeDrawing, Simulation};
+pub use skin::{SkinAxis, SkinFriction};
 pub use snake::Snake;
 pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};

@@ -119,6 +119,11 @@ pub const MAX_SLOPE_DEGREES: f64 = 80.0;
 /// Largest lateral friction coefficient of the ground or an obstacle.
 pub const MAX_WORLD_FRICTION: f64 = 1.0e3;
 
+/// Largest skin friction coefficient (forward, backward, transverse). Bullet clamps every combined lateral
+/// friction (the product of two objects' coefficients) at 10; with the ground's default 1, a larger skin
+/// coefficient would act as 10 anyway.
+pub const MAX_SKIN_FRICTION: f64 = 10.0;
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {

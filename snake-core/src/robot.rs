@@ -28,10 +28,14 @@ use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, LateralUndulation};
 use crate::limits::MAX_URDF_BYTES;
 use crate::math::StartPose;
+use crate::skin::{SkinAxis, SkinFriction};
 use crate::urdf::{Geometry, InertiaSource, UrdfRobot};
 use crate::world::{BaseState, BodyId, Dynamics, Pose, World};
 use crate::world_file::WorldSpec;
 use crate::{Snake, SnakeConfig};
+
+/// The skin axis of a robot link that names none: +x of the link frame.
+pub const ROBOT_SKIN_AXIS: SkinAxis = SkinAxis::X;
 
 /// pybullet's default position gain of `setJointMotorControlArray`.
 pub const DEFAULT_KP: f64 = 0.1;
@@ -62,7 +66,11 @@ impl Default for Motors {
 #[serde(deny_unknown_fields)]
 pub struct LinkSettings {
     /// `changeDynamics(anisotropicFriction=...)` of this link (overrides the robot's).
-    pub anisotropic_friction: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anisotropic_friction: Option<[f64; 3]>,
+    /// Skin friction of this link (overrides the robot's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin_friction: Option<SkinFriction>,
 }
 
 /// A robot file: a small YAML around a URDF. Every key but `urdf` may be left out.
@@ -73,8 +81,10 @@ pub struct LinkSettings {
 /// inertia: shapes                  # or file (URDF_USE_INERTIA_FROM_FILE)
 /// motors: {kp: 0.1, kd: 1.0}       # pybullet's defaults
 /// anisotropic_friction: [1, 0.01, 0.01]   # every link, in its own frame
+/// skin_friction: {forward: 0.1, backward: 0.15, transverse: 0.2, axis: x}   # every link (issue 27)
 /// links:                           # per link, by URDF name
 ///   head: {anisotropic_friction: [1, 1, 1]}
+///   tail: {skin_friction: {forward: 0.1, backward: 0.1, transverse: 0.1}}
 /// gait: {segment_length: 0.0635, wave_length: 0.5, amplitude: 0.6}   # the sine gait's wave
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -94,6 +104,10 @@ pub struct RobotFile {
     /// Anisotropic friction of every link (pybullet's `changeDynamics(anisotropicFriction=...)`).
     #[serde(default)]
     pub anisotropic_friction: Option<[f64; 3]>,
+    /// Skin friction of every link (Hu et al.'s forward/backward/transverse law), in place of their
+    /// lateral and anisotropic friction; its axis defaults to x.
+    #[serde(default)]
+    pub skin_friction: Option<SkinFriction>,
     /// Per-link settings by URDF link name.
     #[serde(default)]
     pub links: BTreeMap<String, LinkSettings>,
@@ -113,6 +127,8 @@ pub struct RobotSpec {
     pub motors: Motors,
     /// Anisotropic friction per link in pybullet's order (index 0: the root); `None` leaves Bullet's.
     pub anisotropic_friction: Vec<Option<[f64; 3]>>,
+    /// Skin friction per link in pybullet's order (index 0: the root); `None` keeps Bullet's friction.
+    pub skin_friction: Vec<Option<SkinFriction>>,
     /// The start pose the robot file names, if any.
     pub start: Option<StartPose>,
     /// The file it was read from.
@@ -152,6 +168,7 @@ impl RobotSpec {
             inertia: InertiaSource::Shapes,
             motors: Motors::default(),
             anisotropic_friction: vec![None; n],
+            skin_friction: vec![None; n],
             start: None,
             source: path.to_path_buf(),
             gait: None,
@@ -188,6 +205,10 @@ impl RobotSpec {
         if let Some(a) = file.anisotropic_friction {
             check_friction(&shown, "anisotropic_friction", a)?;
         }
+        let mut skin = vec![file.skin_friction; urdf.links.len()];
+        if let Some(s) = &file.skin_friction {
+            s.validate(&format!("{shown}: skin_friction"))?;
+        }
         for (name, settings) in &file.links {
             let k = urdf
                 .links
@@ -199,12 +220,14 @@ impl RobotSpec {
                         urdf_path.display()
                     ))
                 })?;
-            check_friction(
-                &shown,
-                &format!("links: {name}: anisotropic_friction"),
-                settings.anisotropic_friction,
-            )?;
-            friction[k] = Some(settings.anisotropic_friction);
+            if let Some(a) = settings.anisotropic_friction {
+                check_friction(&shown, &format!("links: {name}: anisotropic_friction"), a)?;
+                friction[k] = Some(a);
+            }
+            if let Some(s) = &settings.skin_friction {
+                s.validate(&format!("{shown}: links: {name}: skin_friction"))?;
+                skin[k] = Some(*s);
+            }
         }
         if let Some(g) = &file.gait {
             g.validate()
@@ -224,6 +247,7 @@ impl RobotSpec {
             inertia: file.inertia,
             motors: m,
             anisotropic_friction: friction,
+            skin_friction: skin,
             start,
             source: path.to_path_buf(),
             gait: file.gait,
@@ -412,6 +436,11 @@ impl Robot {
                     ..Dynamics::default()
                 };
                 world.change_dynamics(body, k.checked_sub(1), &d)?;
+            }
+        }
+        for (k, skin) in spec.skin_friction.iter().enumerate() {
+            if let Some(s) = skin {
+                world.set_skin_friction(body, k.checked_sub(1), s, ROBOT_SKIN_AXIS)?;
             }
         }
         let joints = spec.urdf.movable_joints();

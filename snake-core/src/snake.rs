@@ -65,6 +65,12 @@ impl Snake {
         for link in 0..config.joints {
             world.change_dynamics(body, Some(link), &friction)?;
         }
+        if let Some(skin) = &config.skin_friction {
+            world.set_skin_friction(body, None, skin, SnakeConfig::HEAD_AXIS)?;
+            for link in 0..config.joints {
+                world.set_skin_friction(body, Some(link), skin, SnakeConfig::HEAD_AXIS)?;
+            }
+        }
         Ok(Snake {
             world,
             body,

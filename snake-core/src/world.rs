@@ -9,6 +9,7 @@ use std::ptr::NonNull;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::error::{check, invalid, Error, Result};
+use crate::skin::{SkinAxis, SkinFriction};
 use crate::urdf::{Geometry, InertiaSource, Inertial, Joint, JointKind, Origin, UrdfRobot};
 
 /// Index of a body within its [`World`], in creation order (pybullet's body unique id).
@@ -694,6 +695,37 @@ impl World {
         };
         // SAFETY: live world; raw is a valid struct for the duration of the call.
         check(unsafe { bullet_sys::ss_change_dynamics(self.ptr(), body.0, link, &raw) })
+    }
+
+    /// Skin friction on a link (`None`: the base), with `default_axis` where the skin names none: Hu
+    /// et al.'s forward/backward/transverse law in place of the link's lateral and anisotropic friction
+    /// (see [`SkinFriction`]). Not a pybullet call; a world without it keeps pybullet parity.
+    pub fn set_skin_friction(
+        &mut self,
+        body: BodyId,
+        link: Option<usize>,
+        skin: &SkinFriction,
+        default_axis: SkinAxis,
+    ) -> Result<()> {
+        skin.validate("skin friction")?;
+        let link = match link {
+            None => -1,
+            Some(l) if l < self.joint_count(body)? => l as i32,
+            Some(l) => return Err(invalid(format!("body {} has no link {l}", body.0))),
+        };
+        let axis = skin.axis_vector(default_axis);
+        // SAFETY: live world; axis holds three f64 for the duration of the call.
+        check(unsafe {
+            bullet_sys::ss_set_skin_friction(
+                self.ptr(),
+                body.0,
+                link,
+                skin.forward,
+                skin.backward,
+                skin.transverse,
+                axis.as_ptr(),
+            )
+        })
     }
 
     /// `setJointMotorControl2` on one joint.
