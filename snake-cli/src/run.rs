@@ -70,7 +70,7 @@ pub struct RunArgs {
     pub anisotropic_friction: Option<[f64; 3]>,
     /// Skin friction F,B,T (forward, backward, transverse; Hu et al. 2009) of every cube or robot link,
     /// in place of their lateral and anisotropic friction; each is multiplied by the ground's friction
-    /// (pybullet's 1). For a robot it replaces the robot file's skin_friction.
+    /// (0.5, Bullet's default for the plane). For a robot it replaces the robot file's skin_friction.
     #[arg(long, value_parser = parse_skin)]
     pub skin_friction: Option<[f64; 3]>,
     /// Head direction of the skin in each link's frame: x, -x, y, -y, z or -z. Default: the built-in

@@ -120,8 +120,8 @@ pub const MAX_SLOPE_DEGREES: f64 = 80.0;
 pub const MAX_WORLD_FRICTION: f64 = 1.0e3;
 
 /// Largest skin friction coefficient (forward, backward, transverse). Bullet clamps every combined lateral
-/// friction (the product of two objects' coefficients) at 10; with the ground's default 1, a larger skin
-/// coefficient would act as 10 anyway.
+/// friction (the product of two objects' coefficients) at 10, so against a ground of friction 1 a larger
+/// coefficient would act as 10 anyway (on the default plane, friction 0.5, a coefficient of 10 acts as 5).
 pub const MAX_SKIN_FRICTION: f64 = 10.0;
 
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.

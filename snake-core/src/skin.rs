@@ -88,9 +88,11 @@ impl std::fmt::Display for SkinAxis {
     }
 }
 
-/// Skin friction coefficients of a link. Each is multiplied by the other object's lateral friction (the
-/// ground's is 1 in pybullet's default, so `ground_friction: 1` leaves them as they are); a link with
-/// skin friction ignores its own lateral and anisotropic friction.
+/// Skin friction coefficients of a link. Each is multiplied by the other object's lateral friction, as
+/// Bullet combines lateral friction: the ground plane of snakesim's worlds (pybullet's
+/// `createMultiBody` plane) has Bullet's default 0.5, so on it each acts at half its value; a ground of
+/// friction 1 leaves them as they are. A link with skin friction ignores its own lateral and
+/// anisotropic friction. docs/friction.md has the law.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SkinFriction {
