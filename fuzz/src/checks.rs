@@ -183,10 +183,15 @@ pub fn world_file(bytes: &[u8]) {
     });
 }
 
-/// Calls `f` with the path of a file named `name`, holding `bytes`, in this process's own scratch
-/// folder (robot files name their URDF relative to themselves).
+/// Calls `f` with the path of a file named `name`, holding `bytes`, in this thread's own scratch
+/// folder (robot and world files name their URDF or CSV relative to themselves). Per thread, not per
+/// process: the test harness runs the checks on several threads at once, and one thread's clean-up
+/// must not remove the folder under another's file.
 fn with_file(name: &str, bytes: &[u8], f: impl FnOnce(&Path)) {
-    let folder = std::env::temp_dir().join(format!("snakesim-fuzz-{}", std::process::id()));
+    let thread = format!("{:?}", std::thread::current().id());
+    let thread: String = thread.chars().filter(char::is_ascii_digit).collect();
+    let folder =
+        std::env::temp_dir().join(format!("snakesim-fuzz-{}-{thread}", std::process::id()));
     std::fs::create_dir_all(&folder).expect("a scratch folder");
     let path = folder.join(name);
     std::fs::write(&path, bytes).expect("a scratch file");

@@ -7,7 +7,8 @@ import re
 import numpy as np
 import pytest
 import snakesim
-from snakesim import SnakeVecEnv, SnakeVectorEnv, runconfig
+from snakesim import SnakeVecEnv, SnakeVectorEnv
+from snakesim.runs import config as runconfig
 
 SKIN = {"forward": 0.05, "backward": 0.05, "transverse": 5.0}
 ISOTROPIC = {"forward": 5.0, "backward": 5.0, "transverse": 5.0}
