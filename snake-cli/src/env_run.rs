@@ -7,7 +7,7 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use snake_core::env::{EnvConfig, ResetOptions, SnakeEnv};
+use snake_core::env::{ResetOptions, SnakeEnv};
 use snake_core::{Gait, LateralUndulation, Preset};
 
 /// A policy that needs no learning.
@@ -21,12 +21,12 @@ pub enum Policy {
     Gait,
 }
 
-/// Arguments of `snake-cli env`.
+/// Arguments of `snake-cli env`. The env's own flags (`--joints`, `--preset`, `--task`,
+/// `--max-episode-steps`, `--goal`) and `--set KEY=VALUE` are env keywords, read by snake-rl's
+/// `env_from_keywords` exactly as `snakesim.SnakeEnv(**keywords)` and a run configuration's `env` table
+/// are: an absent flag takes the env's own default (`EnvConfig`), so no default is restated here.
 #[derive(Args, Debug)]
 pub struct EnvArgs {
-    /// Number of joints N.
-    #[arg(long, default_value_t = 5)]
-    pub joints: usize,
     /// The policy that chooses actions.
     #[arg(long, value_enum, default_value_t = Policy::Gait)]
     pub policy: Policy,
@@ -36,15 +36,56 @@ pub struct EnvArgs {
     /// Seed of the starts (episode k is the k-th reset after seeding) and of the random policy.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Parameter preset: paper or snakebot-gym (the paper's published env).
-    #[arg(long, default_value = "paper")]
-    pub preset: Preset,
-    /// Env steps before an episode is truncated.
-    #[arg(long, default_value_t = 5000)]
-    pub max_steps: u64,
-    /// Goal X,Y in metres.
-    #[arg(long, value_parser = parse_goal, allow_hyphen_values = true, default_value = "0,-10")]
-    pub goal: (f64, f64),
+    /// Number of joints N (default: the env's, 5).
+    #[arg(long)]
+    pub joints: Option<u64>,
+    /// Parameter preset: paper or snakebot-gym, the paper's published env (default: paper).
+    #[arg(long)]
+    pub preset: Option<Preset>,
+    /// The task whose defaults the other keywords override: paper (snakesim/Snake-v0) or goal
+    /// (snakesim/SnakeGoal-v0) (default: paper).
+    #[arg(long, value_parser = ["paper", "goal"])]
+    pub task: Option<String>,
+    /// Env steps before an episode is truncated (default: the task's; 5000 for the paper's).
+    #[arg(long, alias = "max-steps")]
+    pub max_episode_steps: Option<u64>,
+    /// Goal X,Y in metres (default: the task's; 0,-10 for the paper's).
+    #[arg(long, value_parser = parse_goal, allow_hyphen_values = true)]
+    pub goal: Option<(f64, f64)>,
+    /// Any env keyword, as snakesim.SnakeEnv takes it: e.g. world=worlds/rough.yaml,
+    /// robot=robots/wheeled-8.yaml, reward.progress_weight=1, snake.skin_friction.forward=0.05
+    /// (repeatable; the flags above win).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+impl EnvArgs {
+    /// The env keywords the flags name, `--set` first, the flags over them.
+    fn keywords(&self) -> Result<serde_json::Map<String, serde_json::Value>> {
+        use serde_json::{json, Value};
+        let mut keywords = match snake_rl::config::parse_overrides(&self.set)
+            .map_err(|e| anyhow::anyhow!("--set: {e}"))?
+        {
+            Value::Object(map) => map,
+            _ => unreachable!("parse_overrides returns a mapping"),
+        };
+        if let Some(joints) = self.joints {
+            keywords.insert("joints".into(), json!(joints));
+        }
+        if let Some(preset) = self.preset {
+            keywords.insert("preset".into(), json!(preset.name()));
+        }
+        if let Some(task) = &self.task {
+            keywords.insert("task".into(), json!(task));
+        }
+        if let Some(steps) = self.max_episode_steps {
+            keywords.insert("max_episode_steps".into(), json!(steps));
+        }
+        if let Some((x, y)) = self.goal {
+            keywords.insert("goal".into(), json!([x, y]));
+        }
+        Ok(keywords)
+    }
 }
 
 fn parse_goal(text: &str) -> Result<(f64, f64), String> {
@@ -65,9 +106,6 @@ fn parse_goal(text: &str) -> Result<(f64, f64), String> {
 
 /// Runs the episodes and prints one line each, then the totals.
 pub fn run(args: &EnvArgs) -> Result<()> {
-    if args.joints < 1 {
-        bail!("--joints must be at least 1, got {}", args.joints);
-    }
     let max_episodes = snake_rl::config::limits::MAX_EVAL_EPISODES as usize;
     if !(1..=max_episodes).contains(&args.episodes) {
         bail!(
@@ -75,30 +113,53 @@ pub fn run(args: &EnvArgs) -> Result<()> {
             args.episodes
         );
     }
-    let config = EnvConfig {
-        goal: args.goal,
-        max_episode_steps: args.max_steps,
-        ..EnvConfig::with_preset(args.preset, args.joints)
-    };
+    if args.joints == Some(0) {
+        bail!("--joints must be at least 1, got 0");
+    }
+    let keywords = args.keywords()?;
+    let config = snake_rl::config::env_from_keywords(&keywords).map_err(|e| {
+        // Name the flag where one set the keyword, as the other commands do.
+        let text = e.to_string();
+        match text.split_once(':') {
+            Some(("max_episode_steps", rest)) if args.max_episode_steps.is_some() => {
+                anyhow::anyhow!("--max-episode-steps:{rest}")
+            }
+            Some(("goal", rest)) if args.goal.is_some() => anyhow::anyhow!("--goal:{rest}"),
+            Some(("joints", rest)) if args.joints.is_some() => anyhow::anyhow!("--joints:{rest}"),
+            _ => anyhow::anyhow!("{text}"),
+        }
+    })?;
     config.validate()?;
+    let joints = config.joints();
+    if args.policy == Policy::Gait && config.action_dim() != joints {
+        bail!(
+            "--policy gait gives one joint target per joint, but this env's actions are {} values \
+             (the goal task steers a wave: use --policy zero or random)",
+            config.action_dim()
+        );
+    }
     let mut env = SnakeEnv::new(config)?;
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    let mut action = vec![0.0f32; args.joints];
-    let mut targets = vec![0.0f64; args.joints];
+    let mut action = vec![0.0f32; env.action_dim()];
+    let mut targets = vec![0.0f64; joints];
     let mut obs = vec![0.0f32; env.observation_dim()];
     let scale = env.config().action_scale;
 
+    let max_steps = env.config().max_episode_steps;
+    let goal = match env.config().goal_distribution {
+        None => format!("goal ({}, {})", env.config().goal.0, env.config().goal.1),
+        Some(_) => "goals drawn each episode".to_owned(),
+    };
     say!(
-        "env: {} joints, preset {}, policy {}, goal ({}, {}), max {} steps",
-        args.joints,
-        args.preset,
+        "env: {joints} joints, preset {}, policy {}, {goal}, max {max_steps} steps",
+        keywords
+            .get("preset")
+            .and_then(|p| p.as_str())
+            .unwrap_or(snake_rl::config::RunConfig::default().preset.name()),
         args.policy
             .to_possible_value()
             .expect("no skipped variants")
             .get_name(),
-        args.goal.0,
-        args.goal.1,
-        args.max_steps
     )?;
     say!(
         "{:>7}  {:>12}  {:>6}  {:>7}  {:>9}",

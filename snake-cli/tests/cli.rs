@@ -227,6 +227,42 @@ fn env_runs_episodes_with_each_policy() {
 }
 
 /// Bad input: one line on stderr naming the problem, a non-zero exit, never a panic.
+/// `snake-cli env` takes any env keyword (`--set`) and the task, as `snakesim.SnakeEnv` does: the
+/// goal task on a world file runs, truncated where the flag says.
+#[test]
+fn env_takes_every_env_keyword() {
+    let world = format!("world={}/../worlds/rough.yaml", env!("CARGO_MANIFEST_DIR"));
+    let out = snake_cli(&[
+        "env",
+        "--task",
+        "goal",
+        "--policy",
+        "zero",
+        "--episodes",
+        "1",
+        "--max-episode-steps",
+        "50",
+        "--set",
+        &world,
+        "--set",
+        "reward.progress_weight=2",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("goals drawn each episode, max 50 steps"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("     50  "),
+        "the episode is truncated at 50 steps: {stdout}"
+    );
+}
+
 #[test]
 fn bad_input_is_one_clear_line() {
     let cases: &[(&[&str], &str)] = &[
@@ -262,7 +298,7 @@ fn bad_input_is_one_clear_line() {
         (&["run", "--joints", "100000"], "joints must be at most 512"),
         (
             &["env", "--goal", "1e308,1e308"],
-            "goal must have |x| and |y| at most 10000",
+            "--goal: must have |x| and |y| at most 10000",
         ),
         (
             &["env", "--episodes", "1000000"],
@@ -270,7 +306,12 @@ fn bad_input_is_one_clear_line() {
         ),
         (
             &["env", "--max-steps", "100000000000"],
-            "max_episode_steps must be in",
+            "--max-episode-steps: must be in",
+        ),
+        (&["env", "--set", "goall=1"], "goall: unknown field `goall`"),
+        (
+            &["env", "--task", "goal"],
+            "--policy gait gives one joint target per joint",
         ),
         (&["bench", "--steps", "100000000000"], "--steps must be in"),
         (&["bench", "--repeats", "1000000"], "--repeats must be in"),
