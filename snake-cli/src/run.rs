@@ -86,8 +86,9 @@ pub struct RunArgs {
     /// flat plane. Without --start, the body starts raised by the ground's highest point near it.
     #[arg(long)]
     pub world: Option<PathBuf>,
-    /// Write the trajectory here as CSV (one row per 1/240 s step).
-    #[arg(long)]
+    /// Write the trajectory here as CSV (one row per 1/240 s step). `--out` is the same flag, the
+    /// name the `snakesim` command uses for its outputs.
+    #[arg(long, visible_alias = "out")]
     pub output: Option<PathBuf>,
     /// Draw the path seen from above, with the snake's pose at regular moments, as PNG.
     #[arg(long)]

@@ -35,7 +35,7 @@ def add_parser(sub) -> None:
     p.add_argument(
         "runs", nargs="+", metavar="RUN", help="run directories, evaluations.csv files or sweep folders"
     )
-    p.add_argument("--out", required=True, help="the figure (.png, .pdf or .svg)")
+    p.add_argument("--out", "--output", dest="out", required=True, help="the figure (.png, .pdf or .svg)")
     p.add_argument("--title", help="the figure's title")
     p.add_argument(
         "--metric", choices=("mean_return", "success_rate", "mean_steps_to_goal"), default="mean_return"

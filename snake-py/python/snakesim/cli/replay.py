@@ -56,6 +56,8 @@ def add_parser(sub) -> None:
     agent_options(p)
     p.add_argument(
         "--out",
+        "--output",
+        dest="out",
         action="append",
         default=[],
         help="a .png/.pdf/.svg figure, .gif or .mp4 animation (repeatable)",

@@ -39,6 +39,13 @@ def add_parser(sub) -> None:
         "--trials", required=True, metavar="T", type=int_at_least(1, sweep.MAX_TRIALS), help="trials to run"
     )
     p.add_argument("--metric", choices=("success_rate", "mean_return"), default="success_rate")
-    p.add_argument("--out", required=True, metavar="SWEEPS/NAME", help="the search's folder (new, or empty)")
+    p.add_argument(
+        "--out",
+        "--output",
+        dest="out",
+        required=True,
+        metavar="SWEEPS/NAME",
+        help="the search's folder (new, or empty)",
+    )
     cluster_options(p)
     p.set_defaults(func=cmd_search)

@@ -81,7 +81,9 @@ def add_parser(sub) -> None:
     p.add_argument(
         "configs", nargs="*", metavar="CONFIG.yaml", help="run configurations (see snake-py/configs/)"
     )
-    p.add_argument("--out", metavar="SWEEPS/NAME", help="the sweep's folder (new, or empty)")
+    p.add_argument(
+        "--out", "--output", dest="out", metavar="SWEEPS/NAME", help="the sweep's folder (new, or empty)"
+    )
     p.add_argument(
         "--seeds",
         metavar="K",
