@@ -406,3 +406,15 @@ def test_snakesim_train_offers_every_flag_of_snake_cli_train(capsys):
     # The same default run directory, from snake-rl, in both.
     assert "runs/ppo-ARCH-JOINTS-PRESET-seedSEED" in rust
     assert "runs/ppo-ARCH-JOINTS-" in python
+
+
+def test_docs_cli_md_is_current():
+    """docs/cli.md is the two commands' own --help (scripts/cli_docs.py), so it cannot drift."""
+    repo = Path(__file__).resolve().parents[2]
+    target = Path(os.environ.get("CARGO_TARGET_DIR", repo / "target"))
+    if not (target / "release" / "snake-cli").is_file():
+        pytest.skip("snake-cli is not built (bash scripts/setup builds it)")
+    done = subprocess.run(
+        [sys.executable, str(repo / "scripts" / "cli_docs.py"), "--check"], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
