@@ -208,12 +208,14 @@ class SnakeEnv(gymnasium.Env):
             gymnasium.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
         goal = self._env.goal
+        shapes = self._env.robot_shapes()  # a robot's link shapes; None for the built-in cubes
         return top_down(
             self._env.cube_poses(),
             self._env.half_extent,
             goal,
             self._env.goal_radius,
             trail=np.asarray(self._trail) if self._trail else None,
+            shapes=None if shapes is None else json.loads(shapes),
         )
 
     def close(self) -> None:

@@ -18,6 +18,96 @@ def _yaw(q: np.ndarray) -> np.ndarray:
     return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
+#: Points on a circle's outline when a round shape's silhouette is drawn.
+CIRCLE_POINTS = 24
+
+
+def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rows of ``v`` rotated by the unit quaternion ``q`` (x, y, z, w)."""
+    u, w = np.asarray(q[:3], dtype=np.float64), float(q[3])
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def _compose(outer: np.ndarray, inner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pose ``outer * inner`` (each x, y, z, qx, qy, qz, qw) as (position, quaternion)."""
+    p, q = np.asarray(outer[:3], dtype=np.float64), np.asarray(outer[3:7], dtype=np.float64)
+    r = np.asarray(inner[3:7], dtype=np.float64)
+    position = p + _rotate(q, np.asarray(inner[:3], dtype=np.float64)[None, :])[0]
+    x1, y1, z1, w1 = q
+    x2, y2, z2, w2 = r
+    quaternion = np.array(
+        [
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        ]
+    )
+    return position, quaternion
+
+
+def silhouette(link_pose: np.ndarray, shape: dict) -> np.ndarray:
+    """Points (K, 2) whose convex hull is the shape's outline seen from above: a box's 8 corners, the
+    outlines of a cylinder's two end discs, a sphere's equator, a capsule's two end spheres. ``shape``
+    is one of a robot link's shapes (``SnakeEnv``'s ``robot_shapes``: kind, size, pose in the link's
+    centre-of-mass frame), ``link_pose`` the link's pose (x, y, z, qx, qy, qz, qw)."""
+    centre, q = _compose(np.asarray(link_pose, dtype=np.float64), np.asarray(shape["pose"], dtype=np.float64))
+    kind, size = shape["kind"], [float(v) for v in shape["size"]]
+    angles = np.linspace(0.0, 2.0 * np.pi, CIRCLE_POINTS, endpoint=False)
+    ring = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
+    if kind == "box":
+        half = np.asarray(size[:3]) / 2.0
+        signs = np.array(
+            [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=np.float64
+        )
+        local = signs * half
+    elif kind == "sphere":
+        return (centre[None, :2] + size[0] * ring[:, :2]).astype(np.float64)
+    elif kind == "cylinder":
+        r, half_length = size[0], size[1] / 2.0
+        local = np.vstack([r * ring + [0.0, 0.0, z] for z in (-half_length, half_length)])
+    elif kind == "capsule":
+        r, half_length = size[0], size[1] / 2.0
+        ends = _rotate(q, np.array([[0.0, 0.0, -half_length], [0.0, 0.0, half_length]]))
+        # A sphere's outline from above is a circle whatever its orientation.
+        return np.vstack([centre[:2] + end[:2] + r * ring[:, :2] for end in ends])
+    else:
+        raise ValueError(f"unknown shape kind {kind!r}")
+    return (centre[None, :] + _rotate(q, local))[:, :2]
+
+
+def _hull(points: np.ndarray) -> np.ndarray:
+    """The convex hull of 2D points, counter-clockwise (Andrew's monotone chain)."""
+    pts = sorted({(float(x), float(y)) for x, y in points})
+    if len(pts) <= 2:
+        return np.asarray(pts, dtype=np.float64)
+
+    def half(chain):
+        out: list[tuple[float, float]] = []
+        for p in chain:
+            while len(out) >= 2:
+                (ax, ay), (bx, by) = out[-2], out[-1]
+                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 0:
+                    break
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(reversed(pts))
+    return np.asarray(lower[:-1] + upper[:-1], dtype=np.float64)
+
+
+def _inside(polygon: np.ndarray, wx: np.ndarray, wy: np.ndarray) -> np.ndarray:
+    """Which pixel centres lie in a counter-clockwise convex polygon (a point or a segment: none)."""
+    if len(polygon) < 3:
+        return np.zeros(np.broadcast_shapes(wx.shape, wy.shape), dtype=bool)
+    mask = np.ones(np.broadcast_shapes(wx.shape, wy.shape), dtype=bool)
+    for (ax, ay), (bx, by) in zip(polygon, np.roll(polygon, -1, axis=0)):
+        mask &= (bx - ax) * (wy - ay) - (by - ay) * (wx - ax) >= 0
+    return mask
+
+
 def top_down(
     cube_poses: np.ndarray,
     half_extent: float,
@@ -27,8 +117,12 @@ def top_down(
     view: float | None = None,
     centre: tuple[float, float] | None = None,
     trail: np.ndarray | None = None,
+    shapes: list[list[dict]] | None = None,
 ) -> np.ndarray:
-    """Draws cubes (rows of x, y, z, qx, qy, qz, qw; the head first) and the goal disc from above.
+    """Draws the body (rows of x, y, z, qx, qy, qz, qw, one per part; the head first) and the goal disc
+    from above: each part as a cube of ``half_extent`` (the built-in snake), or, with ``shapes`` (a
+    robot's: per part, its collision shapes as ``SnakeEnv.robot_shapes`` gives them), each shape's
+    outline seen from above.
 
     The view is a square `view` metres wide centred on `centre` (default: wide enough for the snake and
     the goal, centred between them). Returns a (size, size, 3) uint8 array, +y up.
@@ -69,6 +163,11 @@ def top_down(
         keep = (cols >= 0) & (cols < size) & (rows >= 0) & (rows < size)
         image[rows[keep], cols[keep]] = TRAIL
 
+    if shapes is not None:
+        for i in range(len(poses) - 1, -1, -1):  # the head last, on top
+            for shape in shapes[i]:
+                image[_inside(_hull(silhouette(poses[i], shape)), wx, wy)] = HEAD if i == 0 else BODY
+        return image
     yaws = _yaw(poses[:, 3:7])
     for i in range(len(poses) - 1, -1, -1):  # the head last, on top
         dx, dy = wx - xy[i, 0], wy - xy[i, 1]

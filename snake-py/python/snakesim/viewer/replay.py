@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import json
 import math
 import os
 import shutil
@@ -20,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from snakesim.envs.render import _yaw
+from snakesim.envs.render import _hull, _yaw, silhouette
 from snakesim.limits import LIMITS
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
@@ -49,6 +50,7 @@ class Recording:
     half_extent: float
     terminated: bool  # reached the goal
     ret: float
+    shapes: list | None = None  # a robot's collision shapes per part (None: the built-in cubes)
 
     @property
     def duration(self) -> float:
@@ -93,6 +95,7 @@ def record(
         half_extent=base.half_extent,
         terminated=bool(terminated),
         ret=ret,
+        shapes=None if base._env.robot_shapes() is None else json.loads(base._env.robot_shapes()),
     )
 
 
@@ -131,14 +134,40 @@ def _heading_segment(x: float, y: float, yaw: float, h: float) -> tuple[list[flo
 
 
 class _SnakeArtist:
-    """The squares and heading lines of one snake on an axes; ``update`` moves them to new poses."""
+    """The squares and heading lines of one snake on an axes, or a robot's collision shapes seen from
+    above (``shapes``: per part, as ``SnakeEnv.robot_shapes`` gives them); ``update`` moves them to new
+    poses."""
 
-    def __init__(self, ax, cubes: int, half_extent: float, alpha: float = 1.0, zorder: int = 3) -> None:
+    def __init__(
+        self,
+        ax,
+        cubes: int,
+        half_extent: float,
+        alpha: float = 1.0,
+        zorder: int = 3,
+        shapes: list | None = None,
+    ) -> None:
         from matplotlib.patches import Polygon
 
         self.h = half_extent
         self.squares = []
         self.lines = []
+        self.outlines = []  # (part, shape, polygon) of a robot
+        if shapes is not None:
+            for i, part in enumerate(shapes):
+                for shape in part:
+                    polygon = Polygon(
+                        np.zeros((3, 2)),
+                        closed=True,
+                        facecolor=HEAD_FACE if i == 0 else BODY_FACE,
+                        edgecolor=EDGE,
+                        linewidth=0.6,
+                        alpha=alpha,
+                        zorder=zorder,
+                    )
+                    ax.add_patch(polygon)
+                    self.outlines.append((i, shape, polygon))
+            return
         for i in range(cubes):
             square = Polygon(
                 np.zeros((4, 2)),
@@ -155,6 +184,8 @@ class _SnakeArtist:
             self.lines.append(line)
 
     def update(self, poses: np.ndarray) -> None:
+        for i, shape, polygon in self.outlines:
+            polygon.set_xy(_hull(silhouette(poses[i], shape)))
         yaws = _yaw(poses[:, 3:7])
         for square, line, pose, yaw in zip(self.squares, self.lines, poses, yaws):
             square.set_xy(_square(pose[0], pose[1], float(yaw), self.h))
@@ -210,7 +241,7 @@ def draw_strip(
             ax.set_ylim(centre[1] - half, centre[1] + half)
             _draw_goal(ax, rec)
             ax.plot(xy[: i + 1, 0, 0], xy[: i + 1, 0, 1], color=TRAIL, linewidth=1.0, alpha=0.6, zorder=2)
-            _SnakeArtist(ax, xy.shape[1], rec.half_extent).update(rec.poses[i])
+            _SnakeArtist(ax, xy.shape[1], rec.half_extent, shapes=rec.shapes).update(rec.poses[i])
             to_goal = np.array(rec.goal) - xy[i, 0]
             if np.any(np.abs(np.array(rec.goal) - centre) > half):
                 # The goal is out of view: a compass arrow in the corner points to it.
@@ -244,9 +275,9 @@ def draw_strip(
         _draw_goal(ax, rec)
         ax.plot(xy[:, 0, 0], xy[:, 0, 1], color=TRAIL, linewidth=1.0, zorder=2)
         for n, i in enumerate(idx):
-            _SnakeArtist(ax, xy.shape[1], rec.half_extent, alpha=0.3 + 0.7 * (n + 1) / panels).update(
-                rec.poses[i]
-            )
+            _SnakeArtist(
+                ax, xy.shape[1], rec.half_extent, alpha=0.3 + 0.7 * (n + 1) / panels, shapes=rec.shapes
+            ).update(rec.poses[i])
         outcome = "goal reached" if rec.terminated else "goal not reached"
         ax.set_title(f"path, {rec.duration:.2f} s, {outcome}", fontsize=9)
         ax.set_aspect("equal")
@@ -305,7 +336,7 @@ def render_frames(rec: Recording, fps: float, size: int = 480):
         ax.tick_params(labelsize=7)
         _draw_goal(ax, rec)
         (trail,) = ax.plot([], [], color=TRAIL, linewidth=1.0, zorder=2)
-        snake = _SnakeArtist(ax, rec.poses.shape[1], rec.half_extent)
+        snake = _SnakeArtist(ax, rec.poses.shape[1], rec.half_extent, shapes=rec.shapes)
         label = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9, zorder=6)
         times = frame_times(rec, fps)
         for t, i in zip(times, _indices(rec, times)):
