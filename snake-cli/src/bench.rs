@@ -17,10 +17,7 @@ fn pybullet_bench_script() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/pybullet_bench.py")
 }
 
-/// Most joint counts one benchmark measures.
-const MAX_BENCH_SIZES: usize = 16;
-/// Most runs per joint count.
-const MAX_BENCH_REPEATS: usize = 100;
+use snake_rl::config::limits::{MAX_BENCH_REPEATS, MAX_BENCH_SIZES};
 
 /// Arguments of `snake-cli bench`.
 #[derive(Args, Debug)]

@@ -550,5 +550,6 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("grid_values", run::MAX_GRID_VALUES)?;
     d.set_item("trial_failures", run::MAX_TRIAL_FAILURES)?;
     d.set_item("search_keys", run::MAX_SEARCH_KEYS)?;
+    d.set_item("trial_name", run::MAX_TRIAL_NAME)?;
     Ok(d)
 }

@@ -62,6 +62,12 @@ pub mod limits {
     pub const MAX_TRIAL_FAILURES: u64 = 100;
     /// Most keys of a search space.
     pub const MAX_SEARCH_KEYS: u64 = 100;
+    /// Longest name of a sweep trial's folder, characters (a config name and its grid point).
+    pub const MAX_TRIAL_NAME: u64 = 100;
+    /// Most joint counts one `snake-cli bench` measures.
+    pub const MAX_BENCH_SIZES: usize = 16;
+    /// Most runs per joint count of `snake-cli bench`.
+    pub const MAX_BENCH_REPEATS: usize = 100;
 }
 
 /// Which implementation of PPO trains the run.

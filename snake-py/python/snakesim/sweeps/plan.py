@@ -54,7 +54,7 @@ CONNECT_TIMEOUT_S = 30.0
 #: is still ending) before it fails, leaving the folder to that writer.
 TRIAL_LOCK_WAIT_S = 60.0
 #: Longest trial folder name (before a number that keeps names apart).
-_MAX_NAME = 100
+_MAX_NAME = LIMITS["trial_name"]
 
 
 class SweepError(ValueError):
