@@ -15,6 +15,7 @@ from snakesim import SnakeEnv, agents
 from snakesim.envs.config import ENV_KEYWORDS
 
 ROBOTS = Path(__file__).resolve().parents[2] / "robots"
+WORLDS = ROBOTS.parent / "worlds"
 
 # Examples per property: each builds a world and steps it a few times (~5 ms).
 EXAMPLES = 500
@@ -56,6 +57,9 @@ plausible = {
         st.none(), st.fixed_dictionaries({"distance": st.tuples(st.floats(0, 5), st.floats(5, 20))})
     ),
     "robot": st.sampled_from([None, str(ROBOTS / "paper-cubes-5.yaml"), str(ROBOTS / "wheeled-8.urdf")]),
+    "world": st.sampled_from(
+        [None, str(WORLDS / "slope-10.yaml"), str(WORLDS / "rough.yaml"), str(WORLDS / "pegs.yaml")]
+    ),
     "snake": st.dictionaries(
         st.sampled_from(["link_mass", "base_mass", "motor_force", "lateral_friction"]),
         st.floats(0.01, 20),
