@@ -98,6 +98,11 @@ protected:
     struct SkinContact {
         int normal;
         btScalar forward, backward, transverse;
+        // 1 / m_jacDiagABInv of the t and n rows (0 for a disabled row): the solve multiplies by these
+        // rather than dividing, as divisions were its hottest instructions.
+        btScalar kt, kn;
+        // The sliding solve's root from the previous iteration: it starts Newton's method there.
+        btScalar s;
     };
     const std::vector<Skin>* m_skins;
     btAlignedObjectArray<btMultiBodySolverConstraint> m_skinRows;
@@ -165,7 +170,7 @@ protected:
             btManifoldPoint& cp = *(btManifoldPoint*)row.m_originalContactPoint;
             const btScalar other = side_friction(row, side > 0);
             auto combine = [&](double mu) { return btMin(btScalar(mu) * other, btScalar(10)); };
-            SkinContact sc{i, combine(skin->forward), combine(skin->backward), combine(skin->transverse)};
+            SkinContact sc{i, combine(skin->forward), combine(skin->backward), combine(skin->transverse), 0, 0, 0};
             m_skinRows.push_back(friction[f]);
             m_skinRows.push_back(friction[f + 1]);
             btMultiBodySolverConstraint& rt = m_skinRows[m_skinRows.size() - 2];
@@ -190,15 +195,96 @@ protected:
             t.normalize();
             const btVector3 dt = t * side;
             const btVector3 dn = normal_dir.cross(dt);
-            btScalar relaxation;
-            const btScalar zero = 0;
-            setupMultiBodyContactConstraint(rt, dt, zero, cp, info, relaxation, true);
-            setupMultiBodyContactConstraint(rn, dn, zero, cp, info, relaxation, true);
+            if (!rotate_pair(rt, rn, normal, dt, dn, cp, info)) {
+                btScalar relaxation;
+                const btScalar zero = 0;
+                setupMultiBodyContactConstraint(rt, dt, zero, cp, info, relaxation, true);
+                setupMultiBodyContactConstraint(rn, dn, zero, cp, info, relaxation, true);
+            }
+            // The contact reports its friction along the directions its impulses act in.
+            cp.m_lateralFrictionDir1 = dt;
+            cp.m_lateralFrictionDir2 = dn;
+            sc.kt = rt.m_jacDiagABInv > 0 ? 1 / rt.m_jacDiagABInv : btScalar(0);
+            sc.kn = rn.m_jacDiagABInv > 0 ? 1 / rn.m_jacDiagABInv : btScalar(0);
             m_skinContacts.push_back(sc);
             normal.m_frictionIndex = -1;
         }
         friction.resize(write);
         return result;
+    }
+
+    // Turns Bullet's friction pair r1, r2 of a contact (normal row nrm) into rows along dt and dn. A row's
+    // Jacobian and its unit-impulse velocity change (M^-1 J^T) are linear in its direction, and the three
+    // rows of a contact share its points and bodies, so the new ones are combinations of Bullet's: this replaces
+    // a second Jacobian fill and articulated-body solve per row (calcAccelerationDeltasMultiDof, the
+    // setup's dearest part) with a few multiply-adds. The rest is setupMultiBodyContactConstraint's
+    // friction-row arithmetic: effective mass with the friction CFM and SOR, right-hand side -v J^-1.
+    // Returns false, leaving the rows alone, where that arithmetic would not be the whole setup: a side
+    // that is a rigid body rather than a multibody, a friction anchor (a positional term), articulated
+    // warm starting (an initial impulse).
+    bool rotate_pair(btMultiBodySolverConstraint& r1, btMultiBodySolverConstraint& r2, const btMultiBodySolverConstraint& nrm, const btVector3& dt,
+                     const btVector3& dn, const btManifoldPoint& cp, const btContactSolverInfo& info) {
+        if (!r1.m_multiBodyA || !r1.m_multiBodyB) return false;
+        if (cp.m_contactPointFlags & BT_CONTACT_FLAG_FRICTION_ANCHOR) return false;
+        if (info.m_solverMode & SOLVER_USE_ARTICULATED_WARMSTARTING) return false;
+        // d1, d2 need not be orthonormal, nor even in the contact plane: Bullet scales them in the link's
+        // frame by its anisotropic friction, which tilts them out of the plane when the link tilts. With
+        // the normal row's direction they still span space, so d = c1 d1 + c2 d2 + c3 m for d = dt, dn
+        // (Cramer's rule). A (nearly) degenerate basis, as a zero anisotropic coefficient makes, is left
+        // to the full setup.
+        const btVector3 d1 = r1.m_contactNormal1, d2 = r2.m_contactNormal1, m = nrm.m_contactNormal1;
+        const btVector3 x23 = d2.cross(m), x31 = m.cross(d1), x12 = d1.cross(d2);
+        const btScalar det = d1.dot(x23);
+        if (!(btFabs(det) > btScalar(1e-6) * d1.length() * d2.length() * m.length())) return false;
+        const btScalar inv_det = 1 / det;
+        const btScalar c11 = dt.dot(x23) * inv_det, c12 = dt.dot(x31) * inv_det, c13 = dt.dot(x12) * inv_det;
+        const btScalar c21 = dn.dot(x23) * inv_det, c22 = dn.dot(x31) * inv_det, c23 = dn.dot(x12) * inv_det;
+        btScalar denom1 = 0, denom2 = 0, vel1 = 0, vel2 = 0;
+        for (int side = 0; side < 2; ++side) {
+            btMultiBody* mb = side ? r1.m_multiBodyB : r1.m_multiBodyA;
+            const int n = mb->getNumDofs() + 6;
+            btScalar* j1 = &m_data.m_jacobians[side ? r1.m_jacBindex : r1.m_jacAindex];
+            btScalar* j2 = &m_data.m_jacobians[side ? r2.m_jacBindex : r2.m_jacAindex];
+            btScalar* u1 = &m_data.m_deltaVelocitiesUnitImpulse[side ? r1.m_jacBindex : r1.m_jacAindex];
+            btScalar* u2 = &m_data.m_deltaVelocitiesUnitImpulse[side ? r2.m_jacBindex : r2.m_jacAindex];
+            const btScalar* j3 = &m_data.m_jacobians[side ? nrm.m_jacBindex : nrm.m_jacAindex];
+            const btScalar* u3 = &m_data.m_deltaVelocitiesUnitImpulse[side ? nrm.m_jacBindex : nrm.m_jacAindex];
+            const btScalar* v = mb->getVelocityVector();
+            for (int i = 0; i < n; ++i) {
+                const btScalar a = j1[i], b = j2[i], c = j3[i];
+                j1[i] = c11 * a + c12 * b + c13 * c;
+                j2[i] = c21 * a + c22 * b + c23 * c;
+                const btScalar p = u1[i], q = u2[i], r = u3[i];
+                u1[i] = c11 * p + c12 * q + c13 * r;
+                u2[i] = c21 * p + c22 * q + c23 * r;
+                denom1 += j1[i] * u1[i];
+                denom2 += j2[i] * u2[i];
+                vel1 += v[i] * j1[i];
+                vel2 += v[i] * j2[i];
+            }
+        }
+        const btScalar cfm = info.m_frictionCFM * (btScalar(1) / info.m_timeStep);
+        auto finish = [&](btMultiBodySolverConstraint& r, const btVector3& d, btScalar denom, btScalar vel) {
+            r.m_contactNormal1 = d;
+            r.m_contactNormal2 = -d;
+            const btScalar dd = denom + cfm;
+            r.m_jacDiagABInv = dd > SIMD_EPSILON ? info.m_sor / dd : btScalar(0);
+            r.m_rhs = -vel * r.m_jacDiagABInv;
+            r.m_rhsPenetration = 0;
+            r.m_cfm = cfm * r.m_jacDiagABInv;
+            r.m_appliedImpulse = 0;
+            r.m_appliedPushImpulse = 0;
+        };
+        // The cross products with the lever arms are linear in the direction too.
+        const btVector3 a1 = r1.m_relpos1CrossNormal, a2 = r2.m_relpos1CrossNormal, a3 = nrm.m_relpos1CrossNormal;
+        const btVector3 b1 = r1.m_relpos2CrossNormal, b2 = r2.m_relpos2CrossNormal, b3 = nrm.m_relpos2CrossNormal;
+        r1.m_relpos1CrossNormal = a1 * c11 + a2 * c12 + a3 * c13;
+        r2.m_relpos1CrossNormal = a1 * c21 + a2 * c22 + a3 * c23;
+        r1.m_relpos2CrossNormal = b1 * c11 + b2 * c12 + b3 * c13;
+        r2.m_relpos2CrossNormal = b1 * c21 + b2 * c22 + b3 * c23;
+        finish(r1, dt, denom1, vel1);
+        finish(r2, dn, denom2, vel2);
+        return true;
     }
 
     // Velocity along row c produced by the impulses applied so far in this solve.
@@ -251,13 +337,14 @@ protected:
     //   it itself produces, u = K (impulse - (st, sn)) / |...| with K the rows' inverse effective masses.
     //   Writing u_i = -a_i / (s + b_i) (a_i = K_i s_i, b_i = K_i mu_i N) turns that into one equation,
     //   sum_i (a_i / (s + b_i))^2 = 1 for s >= 0, convex and decreasing in s, which Newton's method solves
-    //   from below. The result is continuous at the stick/slip boundary, equals Coulomb's clamp when the
+    //   from the previous iteration's root (a contact's root moves little between iterations, so two or
+    //   three steps usually do). The result is continuous at the stick/slip boundary, equals Coulomb's clamp when the
     //   contact slides along t or n, and Bullet's cone clamp when the skin is isotropic and the two rows
     //   have equal effective masses.
     btScalar solve_skin_contact(int k) {
         btMultiBodySolverConstraint& rt = m_skinRows[2 * k];
         btMultiBodySolverConstraint& rn = m_skinRows[2 * k + 1];
-        const SkinContact& sc = m_skinContacts[k];
+        SkinContact& sc = m_skinContacts[k];
         const btScalar N = m_multiBodyNormalContactConstraints[sc.normal].m_appliedImpulse;
         const btScalar st = rt.m_appliedImpulse + rt.m_rhs - rt.m_appliedImpulse * rt.m_cfm - row_delta_velocity(rt) * rt.m_jacDiagABInv;
         const btScalar sn = rn.m_appliedImpulse + rn.m_rhs - rn.m_appliedImpulse * rn.m_cfm - row_delta_velocity(rn) * rn.m_jacDiagABInv;
@@ -269,32 +356,36 @@ protected:
         } else if (st * st * mn * mn + sn * sn * ma * ma <= ma * ma * mn * mn) {
             lt = st;
             ln = sn;
-        } else if (!(rt.m_jacDiagABInv > 0) || !(rn.m_jacDiagABInv > 0)) {
-            // A row Bullet disabled (no effective mass): each row clamped on its own.
+        } else if (!(sc.kt > 0) || !(sc.kn > 0) || st == 0 || sn == 0) {
+            // A row Bullet disabled (no effective mass), or sliding along t or n, where the law is
+            // Coulomb's clamp: each row clamped on its own.
             lt = btMax(-ma, btMin(st, ma));
             ln = btMax(-mn, btMin(sn, mn));
         } else {
-            const btScalar a[2] = {st / rt.m_jacDiagABInv, sn / rn.m_jacDiagABInv};
-            const btScalar b[2] = {ma / rt.m_jacDiagABInv, mn / rn.m_jacDiagABInv};
-            btScalar s = 0;
-            for (int i = 0; i < 2; ++i) s = btMax(s, btFabs(a[i]) - b[i]);
+            const btScalar a0 = st * sc.kt, a1 = sn * sc.kn;
+            const btScalar b0 = ma * sc.kt, b1 = mn * sc.kn;
+            // Below the root, where one term alone is 1; s + b_i >= |a_i| > 0 from there on.
+            const btScalar lo = btMax(btScalar(0), btMax(btFabs(a0) - b0, btFabs(a1) - b1));
+            // Start from the previous iteration's root. Where that is above this root, the first step
+            // (h convex and decreasing) lands below it, and the clamp at lo keeps it valid.
+            btScalar s = btMax(lo, sc.s);
             for (int it = 0; it < 60; ++it) {
-                btScalar h = -1, dh = 0;
-                for (int i = 0; i < 2; ++i) {
-                    if (a[i] == 0) continue;
-                    btScalar q = a[i] / (s + b[i]);
-                    h += q * q;
-                    dh -= 2 * q * q / (s + b[i]);
-                }
-                if (!(h > 0) || !(dh < 0)) break;
-                btScalar step = -h / dh;
-                s += step;
-                if (step <= btScalar(1e-14) * s) break;
+                // One division for both reciprocals: 1 / (s + b0) = (s + b1) / ((s + b0)(s + b1)).
+                const btScalar p0 = s + b0, p1 = s + b1;
+                const btScalar inv = 1 / (p0 * p1);
+                const btScalar r0 = p1 * inv, r1 = p0 * inv;
+                const btScalar q0 = a0 * r0, q1 = a1 * r1;
+                const btScalar h = q0 * q0 + q1 * q1 - 1;
+                const btScalar dh = q0 * q0 * r0 + q1 * q1 * r1;  // -h'(s) / 2
+                if (!(dh > 0)) break;
+                const btScalar step = h / (2 * dh);
+                s = btMax(lo, s + step);
+                // A relative step of 1e-10 leaves the impulse's error far below the solver's own.
+                if (btFabs(step) <= btScalar(1e-10) * s) break;
             }
-            const btScalar ut = a[0] == 0 ? btScalar(0) : -a[0] / (s + b[0]);
-            const btScalar un = a[1] == 0 ? btScalar(0) : -a[1] / (s + b[1]);
-            lt = -ma * ut;
-            ln = -mn * un;
+            sc.s = s;
+            lt = ma * a0 / (s + b0);
+            ln = mn * a1 / (s + b1);
         }
         const btScalar dt = lt - rt.m_appliedImpulse;
         const btScalar dn = ln - rn.m_appliedImpulse;
@@ -302,9 +393,7 @@ protected:
         rn.m_appliedImpulse = ln;
         apply_row_impulse(rt, dt);
         apply_row_impulse(rn, dn);
-        btScalar residual = 0;
-        if (rt.m_jacDiagABInv > 0) residual += dt / rt.m_jacDiagABInv;
-        if (rn.m_jacDiagABInv > 0) residual += dn / rn.m_jacDiagABInv;
+        const btScalar residual = dt * sc.kt + dn * sc.kn;
         return residual * residual;
     }
 
