@@ -320,7 +320,8 @@ impl Heightfield {
     /// of a 64 x 64 grid cost 17 million comparisons).
     pub fn points(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
         let mid = self.middle();
-        (0..self.columns).flat_map(move |y| (0..self.rows).map(move |x| self.point_about(x, y, mid)))
+        (0..self.columns)
+            .flat_map(move |y| (0..self.rows).map(move |x| self.point_about(x, y, mid)))
     }
 
     /// Middle of the lowest and highest sample, where Bullet puts z = 0 of the grid.
