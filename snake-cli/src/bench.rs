@@ -41,9 +41,9 @@ pub struct BenchArgs {
     /// both sides replay the same precomputed targets.
     #[arg(long, conflicts_with = "joints")]
     pub robot: Option<PathBuf>,
-    /// Measure the built-in snake on this world file beside the flat plane, in the same run
-    /// (interleaved runs; pybullet is not measured): steps/s on each and their ratio.
-    #[arg(long, conflicts_with_all = ["robot", "python", "skin_friction"])]
+    /// Measure the built-in snake on this world file beside the flat plane, in the same run, ours
+    /// and pybullet's (interleaved runs): steps/s on each and their ratios.
+    #[arg(long, conflicts_with_all = ["robot", "skin_friction"])]
     pub world: Option<PathBuf>,
     /// Measure the cost of skin friction F,B,T on the built-in snake: runs with and without it,
     /// alternated, and the ratio of their step times (snakesim only).
@@ -76,7 +76,7 @@ fn one_run_in(
     let mut config = Preset::Paper.config(joints);
     config.skin_friction = skin;
     let mut start = StartPose::resting(config.half_extent);
-    start.z += world.ground_top((joints as f64 + 0.5) * config.link_spacing() + config.half_extent);
+    start.z = start_height(joints, world);
     let mut snake = Snake::in_world(&config, start, world)?;
     let mut gait = LateralUndulation::default();
     let mut targets = vec![0.0; joints];
@@ -351,8 +351,93 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--world`: the built-in snake on the world and on the flat plane, runs interleaved so that both see
-/// the same machine load.
+/// The world as a pybullet user writes it, for tests/reference/world_bench.py: generators expanded
+/// into a heightfield CSV (written into `dir`) and a list of obstacles, as JSON (serde_json writes
+/// shortest round-trip floats, which Python's json reads back to the same doubles).
+fn pybullet_world_json(world: &WorldSpec, dir: &Path) -> Result<PathBuf> {
+    use serde_json::json;
+    use snake_core::world_file::{Ground, ObstacleShape};
+    let ground = match &world.ground {
+        Ground::Plane => json!({"plane": {}}),
+        Ground::Slope(degrees) => json!({"slope": {"degrees": degrees}}),
+        Ground::Heightfield(h) => {
+            let csv = dir.join("heightfield.csv");
+            std::fs::write(&csv, h.to_csv()).context("cannot write the heightfield")?;
+            json!({"heightfield": {"file": csv, "scale": h.scale}})
+        }
+    };
+    let obstacles: Vec<serde_json::Value> = world
+        .obstacles
+        .iter()
+        .map(|o| {
+            let mut v = match o.shape {
+                ObstacleShape::Box(h) => json!({"shape": "box", "half_extents": h}),
+                ObstacleShape::Cylinder { radius, height } => {
+                    json!({"shape": "cylinder", "radius": radius, "height": height})
+                }
+                ObstacleShape::Sphere(r) => json!({"shape": "sphere", "radius": r}),
+            };
+            v["position"] = json!(o.position);
+            v["yaw"] = json!(o.yaw);
+            if let Some(mu) = o.lateral_friction {
+                v["lateral_friction"] = json!(mu);
+            }
+            v
+        })
+        .collect();
+    let mut spec = json!({"ground": ground, "obstacles": obstacles});
+    if let Some(mu) = world.ground_friction {
+        spec["ground_friction"] = json!(mu);
+    }
+    let path = dir.join("world.json");
+    std::fs::write(&path, spec.to_string()).context("cannot write the world")?;
+    Ok(path)
+}
+
+/// The snake's start height on `world`, raised over the ground as `snake-cli run` raises it.
+fn start_height(joints: usize, world: &WorldSpec) -> f64 {
+    let config = Preset::Paper.config(joints);
+    let start = StartPose::resting(config.half_extent);
+    start.z + world.ground_top((joints as f64 + 0.5) * config.link_spacing() + config.half_extent)
+}
+
+/// pybullet's rates on the flat plane and on the world, one run each (tests/reference/world_bench.py).
+fn pybullet_world_rates(
+    python: &Path,
+    world_json: &Path,
+    joints: usize,
+    z: f64,
+    steps: u64,
+) -> Result<(f64, f64)> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/world_bench.py");
+    if !script.exists() {
+        bail!(
+            "{} is missing (run bench from a snakesim checkout)",
+            script.display()
+        );
+    }
+    let rates = run_reference(
+        python,
+        Command::new(python)
+            .arg(&script)
+            .arg(world_json)
+            .arg(joints.to_string())
+            .arg(format!("{z:?}"))
+            .arg(steps.to_string())
+            .arg("1"),
+    )?;
+    let first = |key: &str| -> Result<f64> {
+        rates
+            .get(key)
+            .and_then(|v| v.get(0))
+            .and_then(serde_json::Value::as_f64)
+            .with_context(|| format!("the pybullet benchmark printed no {key} rate"))
+    };
+    Ok((first("flat")?, first("world")?))
+}
+
+/// `--world`: the built-in snake on the world and on the flat plane, ours and pybullet's, runs
+/// interleaved so that all four see the same machine load.
 fn bench_world(args: &BenchArgs, path: &Path) -> Result<()> {
     let world = WorldSpec::load(path)?;
     say!(
@@ -371,21 +456,70 @@ fn bench_world(args: &BenchArgs, path: &Path) -> Result<()> {
             snake_core::world_file::Ground::Plane => String::new(),
         }
     )?;
+    let python = if args.no_reference {
+        None
+    } else {
+        let found = find_python(args.python.as_deref());
+        if found.is_none() {
+            eprintln!("note: no Python with pybullet found (.venv/bin/python or --python); measuring snakesim only");
+        }
+        found
+    };
+    let dir = tempfile::tempdir().context("cannot make a temporary directory")?;
+    let world_json = match &python {
+        Some(_) => Some(pybullet_world_json(&world, dir.path())?),
+        None => None,
+    };
     say!(
-        "{:>6}  {:>16}  {:>16}  {:>7}",
+        "{:>6}  {:>11}  {:>11}  {:>6}  {:>13}  {:>13}  {:>6}",
         "joints",
         "flat plane",
         "world",
+        "ratio",
+        "pybullet flat",
+        "pybullet world",
         "ratio"
     )?;
     for &joints in &args.joints {
+        let z = start_height(joints, &world);
         let (mut on_flat, mut on_world) = (Vec::new(), Vec::new());
+        let mut theirs = world_json.as_ref().map(|_| (Vec::new(), Vec::new()));
         for _ in 0..args.repeats {
             on_flat.push(one_run(joints, args.steps, None)?);
             on_world.push(one_run_in(joints, args.steps, None, &world)?);
+            if let (Some(python), Some(json), Some((flat, on))) =
+                (&python, &world_json, theirs.as_mut())
+            {
+                match pybullet_world_rates(python, json, joints, z, args.steps) {
+                    Ok((f, w)) => {
+                        flat.push(f);
+                        on.push(w);
+                    }
+                    Err(e) => {
+                        eprintln!("note: pybullet reference not measured: {e:#}");
+                        theirs = None;
+                    }
+                }
+            }
         }
         let (f, w) = (median(on_flat), median(on_world));
-        say!("{joints:>6}  {f:>16.0}  {w:>16.0}  {:>6.2}x", w / f)?;
+        match theirs {
+            Some((pf, pw)) => {
+                let (pf, pw) = (median(pf), median(pw));
+                say!(
+                    "{joints:>6}  {f:>11.0}  {w:>11.0}  {:>5.2}x  {pf:>13.0}  {pw:>13.0}  {:>5.2}x",
+                    w / f,
+                    pw / pf
+                )?;
+            }
+            None => say!(
+                "{joints:>6}  {f:>11.0}  {w:>11.0}  {:>5.2}x  {:>13}  {:>13}  {:>6}",
+                w / f,
+                "-",
+                "-",
+                "-"
+            )?,
+        }
     }
     Ok(())
 }

@@ -4,6 +4,8 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use anyhow::{anyhow, Result};
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ColorType, ImageEncoder};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 use snake_core::{Pose, Simulation};
@@ -39,6 +41,13 @@ pub fn output(path: &Path) -> Result<OutputFile> {
     OutputFile::new(path, "plot", &["png"])
 }
 
+/// The plot's side in pixels unless `--plot-size` says otherwise.
+pub const DEFAULT_SIZE: u32 = 900;
+/// Smallest side: below it the labels overlap the drawing.
+pub const MIN_SIZE: u32 = 200;
+/// Largest side (a 4000 x 4000 RGB image is 48 MB in memory).
+pub const MAX_SIZE: u32 = 4000;
+
 /// What a run leaves to draw.
 pub struct PathPlot {
     trace: Vec<(f64, f64)>,
@@ -70,8 +79,8 @@ impl PathPlot {
         Ok(())
     }
 
-    /// Draws the PNG and puts it in place.
-    pub fn draw(&self, file: OutputFile, title: &str) -> Result<()> {
+    /// Draws the PNG, `size` pixels square, and puts it in place.
+    pub fn draw(&self, file: OutputFile, title: &str, size: u32) -> Result<()> {
         let path = file.path();
         let h = self.half_extent;
         let points = self
@@ -95,7 +104,10 @@ impl PathPlot {
         );
 
         let err = |e: &dyn std::fmt::Display| anyhow!("cannot draw plot {}: {e}", path.display());
-        let root = BitMapBackend::new(file.temp_path(), (900, 900)).into_drawing_area();
+        // Drawn into memory and encoded here: plotters' own PNG writer uses fast compression, which
+        // leaves the atlas's pictures three times larger than the best compression does.
+        let mut pixels = vec![0u8; 3 * size as usize * size as usize];
+        let root = BitMapBackend::with_buffer(&mut pixels, (size, size)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let text = font_available();
         let mut builder = ChartBuilder::on(&root);
@@ -163,6 +175,14 @@ impl PathPlot {
         root.present().map_err(|e| err(&e))?;
         drop(chart);
         drop(root);
+        let out = std::fs::File::create(file.temp_path()).map_err(|e| err(&e))?;
+        PngEncoder::new_with_quality(
+            std::io::BufWriter::new(out),
+            CompressionType::Best,
+            FilterType::Adaptive,
+        )
+        .write_image(&pixels, size, size, ColorType::Rgb8)
+        .map_err(|e| err(&e))?;
         file.commit()
     }
 }

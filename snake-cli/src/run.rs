@@ -93,6 +93,9 @@ pub struct RunArgs {
     /// Draw the path seen from above, with the snake's pose at regular moments, as PNG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Width and height of the --plot PNG, pixels.
+    #[arg(long, default_value_t = plot::DEFAULT_SIZE, value_parser = clap::value_parser!(u32).range(plot::MIN_SIZE as i64..=plot::MAX_SIZE as i64))]
+    pub plot_size: u32,
     /// Write the full state after every physics step (cube poses, joint angles, velocities, torques,
     /// targets) as CSV: the physics trace that `snakesim convert` turns into a Rerun recording (for a
     /// robot, every link, and its shapes in the metadata).
@@ -285,12 +288,13 @@ pub enum Drive {
 }
 
 /// Where results go; every path was checked before the run.
-#[derive(Default)]
 pub struct Outputs {
     /// Trajectory CSV.
     pub trajectory: Option<PathBuf>,
     /// PNG plot.
     pub plot: Option<PathBuf>,
+    /// The plot's width and height, pixels.
+    pub plot_size: u32,
     /// Physics trace CSV (the built-in snake).
     pub trace: Option<PathBuf>,
     /// Rerun recording (the built-in snake).
@@ -433,6 +437,7 @@ impl RunPlan {
             outputs: Outputs {
                 trajectory: args.output.clone(),
                 plot: args.plot.clone(),
+                plot_size: args.plot_size,
                 trace: args.trace.clone(),
                 rrd: args.rrd.clone(),
                 quiet: false,
@@ -724,7 +729,7 @@ pub fn execute(plan: &RunPlan) -> Result<RunReport> {
                 body.time()
             ),
         };
-        path.draw(file, &title)?;
+        path.draw(file, &title, out.plot_size)?;
         if !out.quiet {
             say!("wrote {}", written.display())?;
         }

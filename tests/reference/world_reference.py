@@ -45,6 +45,11 @@ def read_heightfield(path):
 def build_world(client, world_path):
     with open(world_path) as f:
         world = yaml.safe_load(f) or {}
+    return build_world_from(client, world, os.path.dirname(world_path))
+
+
+def build_world_from(client, world, base_dir):
+    """The world of a parsed world file (a dict); heightfield files are read relative to base_dir."""
     ((kind, args),) = world.get("ground", {"plane": {}}).items()
     if kind == "plane":
         ground = client.createMultiBody(0, client.createCollisionShape(p.GEOM_PLANE))
@@ -53,7 +58,7 @@ def build_world(client, world_path):
         shape = client.createCollisionShape(p.GEOM_PLANE)
         ground = client.createMultiBody(0, shape, -1, [0, 0, 0], orientation)
     elif kind == "heightfield":
-        lines = read_heightfield(os.path.join(os.path.dirname(world_path), args["file"]))
+        lines = read_heightfield(os.path.join(base_dir, args["file"]))
         shape = client.createCollisionShape(
             p.GEOM_HEIGHTFIELD,
             meshScale=args["scale"],
