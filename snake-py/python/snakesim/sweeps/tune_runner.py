@@ -402,9 +402,10 @@ def _tune_callback(display: _Display, names: Callable[[Any], str]):
 
 
 @contextlib.contextmanager
-def scoped_settings(env: Mapping[str, str] = {}, loggers: Mapping[str, int] = {}):  # noqa: B006 - read only
+def scoped_settings(env: Mapping[str, str] | None = None, loggers: Mapping[str, int] | None = None):
     """Sets environment variables and logger levels for the block and restores the process's own
     afterwards: a library call leaves the process as it found it."""
+    env, loggers = env or {}, loggers or {}
     saved_env = {key: os.environ.get(key) for key in env}
     saved_levels = {name: logging.getLogger(name).level for name in loggers}
     os.environ.update(env)
