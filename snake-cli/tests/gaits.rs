@@ -91,6 +91,67 @@ fn linear_and_roll_move_the_yaw_pitch_robot_as_named() {
     );
 }
 
+/// `turn` spins the yaw-pitch robot in place: its root link's heading, from the trajectory CSV's
+/// quaternions, turns by more than a full turn in 10 s while the centre of mass drifts less than one
+/// body length (about 1 m).
+#[test]
+fn turn_spins_the_yaw_pitch_robot_in_place() {
+    let csv = std::env::temp_dir().join(format!("snake-cli-turn-{}.csv", std::process::id()));
+    let out = snake_cli(&[
+        "run",
+        "--robot",
+        &robot("yaw-pitch-16.yaml"),
+        "--gait",
+        "turn",
+        "--seconds",
+        "10",
+        "--output",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let _ = std::fs::remove_file(&csv);
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (qx, qy, qz, qw) = (
+        col("base_qx"),
+        col("base_qy"),
+        col("base_qz"),
+        col("base_qw"),
+    );
+    let (mut turned, mut last) = (0.0f64, None::<f64>);
+    for line in lines {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        let (x, y, z, w) = (v[qx], v[qy], v[qz], v[qw]);
+        let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+        if let Some(prev) = last {
+            // Unwrapped: steps of 1/240 s turn far less than pi.
+            let mut d = yaw - prev;
+            d -= std::f64::consts::TAU * (d / std::f64::consts::TAU).round();
+            turned += d;
+        }
+        last = Some(yaw);
+    }
+    assert!(
+        turned.abs() > std::f64::consts::TAU,
+        "turn rotated the robot by only {:.0} degrees in 10 s",
+        turned.to_degrees()
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let moved: f64 = text
+        .lines()
+        .find_map(|l| l.strip_prefix("centre of mass moved "))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .expect("a centre-of-mass line");
+    assert!(moved < 1.0, "turn moved the centre of mass {moved:.2} m");
+}
+
 #[test]
 fn lateral_and_turn_run_on_the_cube_snake() {
     let (dx, dy) = displacement(&robot("paper-cubes-5.yaml"), "lateral", "4");
