@@ -186,12 +186,7 @@ impl BodyPlan {
             BodyPlan::Cubes { config, .. } => std::iter::once(config.base_mass)
                 .chain(std::iter::repeat_n(config.link_mass, config.joints))
                 .collect(),
-            BodyPlan::Robot(spec) => spec
-                .urdf
-                .links
-                .iter()
-                .map(|l| l.inertial.as_ref().map_or(1.0, |i| i.mass))
-                .collect(),
+            BodyPlan::Robot(spec) => spec.masses(),
         }
     }
 

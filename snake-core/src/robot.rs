@@ -148,6 +148,16 @@ fn check_friction(file: &str, key: &str, a: [f64; 3]) -> Result<()> {
 }
 
 impl RobotSpec {
+    /// Mass of each link, kg, in pybullet's link order (the root first): the URDF's `<inertial>`
+    /// masses, and pybullet's default of 1 kg for a link without one.
+    pub fn masses(&self) -> Vec<f64> {
+        self.urdf
+            .links
+            .iter()
+            .map(|l| l.inertial.as_ref().map_or(1.0, |i| i.mass))
+            .collect()
+    }
+
     /// Reads a robot: a `.urdf` file alone (pybullet's defaults for everything else) or a `.yaml` /
     /// `.yml` robot file.
     pub fn load(path: &Path) -> Result<Self> {

@@ -159,3 +159,20 @@ def test_an_agent_trained_on_a_robot_evaluates_and_replays(tmp_path, capsys):
         assert out.is_file() and out.stat().st_size > 1000, out
     printed = capsys.readouterr().out
     assert "wrote" in printed and "recorded episode 1" in printed
+
+
+def test_cost_of_transport_weighs_the_robot():
+    """The evaluation's weight m g (cost of transport's denominator) is the robot's: the sum of its
+    URDF links' masses (read here with ElementTree), pybullet's 1 kg for a link without <inertial>."""
+    import xml.etree.ElementTree as ET
+
+    from snakesim.agents.evaluation import run_episodes
+
+    urdf = ET.parse(ROBOTS / "wheeled-8.urdf").getroot()
+    masses = []
+    for link in urdf.findall("link"):
+        mass = link.find("inertial/mass")
+        masses.append(1.0 if mass is None else float(mass.get("value")))
+    kwargs = {"task": "goal", "robot": str(ROBOTS / "wheeled-8.yaml"), "max_episode_steps": 5}
+    done = run_episodes(lambda obs: np.zeros((len(obs), 3), dtype=np.float32), kwargs, episodes=2, seed=0)
+    assert [e["weight"] for e in done] == pytest.approx([sum(masses) * 9.81] * 2, rel=1e-12)

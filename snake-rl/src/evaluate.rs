@@ -203,8 +203,8 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     envs.reset(Some(seed), &mut out.obs)?;
     let step_seconds = config.snake.dt * f64::from(config.physics_steps_per_env_step);
     let mut actions = vec![A::default(); m * n];
-    let snake = &config.snake;
-    let weight = (snake.base_mass + snake.joints as f64 * snake.link_mass) * snake.gravity.abs();
+    // The body's weight m g, for the cost of transport (the robot's links' masses for a robot).
+    let weight = config.body_mass() * config.snake.gravity.abs();
     let mut done = Vec::with_capacity(episodes);
     while counts != targets {
         if stop() {

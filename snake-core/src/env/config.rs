@@ -329,6 +329,15 @@ impl EnvConfig {
         }
     }
 
+    /// Mass of the whole body, kg: the built-in snake's cubes, or the robot's links
+    /// ([`RobotSpec::masses`](crate::RobotSpec::masses)).
+    pub fn body_mass(&self) -> f64 {
+        match &self.robot {
+            Some(r) => r.spec().masses().iter().sum(),
+            None => self.snake.base_mass + self.snake.joints as f64 * self.snake.link_mass,
+        }
+    }
+
     /// Length of an action: one value per joint, or the gait mode's three.
     pub fn action_dim(&self) -> usize {
         self.action.dim(self.joints())
