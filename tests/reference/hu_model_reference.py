@@ -4,9 +4,12 @@ force and torque on the body vanish.
 
 Usage: hu_model_reference.py SPEC.json OUT_DIR. SPEC holds, per case, the coefficients (forward,
 backward, transverse) and the sampled shape: time step between samples, and for every sample and
-element its position (x, y) and skin axis (tx, ty, the direction the head points). Elements have equal
-weight on flat ground. Writes OUT_DIR/hu_model.json: per case the model's mean velocity (vx, vy) and
-mean rotation rate over the samples, and the largest force and torque residuals left.
+element its position (x, y), skin axis (tx, ty, the direction the head points) and normal force (the
+simulator's, for the weighted variant). Writes OUT_DIR/hu_model.json: per case, for the model as Hu et
+al. wrote it (equal weight on every element, "equal") and for the same balance with each element's
+force scaled by its normal force ("weighted"), the mean velocity (vx, vy) and rotation rate over the
+samples, the largest force and torque residual left, and how many samples Newton's method left above
+1e-8 (the law is not smooth where an element's sliding direction crosses its skin axis).
 
 The shape velocity of element i is its velocity less the body's rigid motion: the body's velocity V is
 the elements' mean velocity and its rotation rate w makes the shape velocity carry no angular momentum
@@ -37,18 +40,18 @@ def forces(u, t, mu_f, mu_b, mu_t):
     return -(mu_t * un)[:, None] * n - (mu_a * ut)[:, None] * t
 
 
-def residual(x, r, w_shape, t, mu):
-    """Net force (2) and torque (1) per element on the body moving at U = x[:2], W = x[2]."""
+def residual(x, r, w_shape, t, mu, weight):
+    """Net force (2) and torque (1) per unit weight on the body moving at U = x[:2], W = x[2]."""
     rot = np.stack([-r[:, 1], r[:, 0]], axis=1) * x[2]
-    f = forces(x[:2] + rot + w_shape, t, *mu)
+    f = forces(x[:2] + rot + w_shape, t, *mu) * weight[:, None]
     torque = (r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0]).sum()
-    return np.array([f[:, 0].sum(), f[:, 1].sum(), torque]) / len(r)
+    return np.array([f[:, 0].sum(), f[:, 1].sum(), torque]) / weight.sum()
 
 
-def solve(r, w_shape, t, mu, x0):
+def solve(r, w_shape, t, mu, weight, x0):
     """Newton's method with a finite-difference Jacobian and a halving line search on |residual|."""
     x = x0.copy()
-    g = residual(x, r, w_shape, t, mu)
+    g = residual(x, r, w_shape, t, mu, weight)
     for _ in range(100):
         if np.abs(g).max() < 1e-11:
             break
@@ -57,7 +60,7 @@ def solve(r, w_shape, t, mu, x0):
             h = 1e-7 * max(1.0, abs(x[j]))
             e = np.zeros(3)
             e[j] = h
-            jac[:, j] = (residual(x + e, r, w_shape, t, mu) - g) / h
+            jac[:, j] = (residual(x + e, r, w_shape, t, mu, weight) - g) / h
         try:
             step = -np.linalg.solve(jac, g)
         except np.linalg.LinAlgError:
@@ -65,7 +68,7 @@ def solve(r, w_shape, t, mu, x0):
         lam = 1.0
         while lam > 1e-6:
             trial = x + lam * step
-            gt = residual(trial, r, w_shape, t, mu)
+            gt = residual(trial, r, w_shape, t, mu, weight)
             if np.abs(gt).max() < np.abs(g).max():
                 break
             lam *= 0.5
@@ -73,14 +76,15 @@ def solve(r, w_shape, t, mu, x0):
     return x, g
 
 
-def run_case(case):
+def run_case(case, use_weights):
     mu = (case["forward"], case["backward"], case["transverse"])
     pos = np.array(case["positions"])  # samples x elements x 2
     axis = np.array(case["axes"])
     dt = case["sample_dt"]
+    weights = np.array(case["weights"]) if use_weights else None
     vel = (pos[2:] - pos[:-2]) / (2 * dt)  # central differences at samples 1 .. n-2
     x = np.zeros(3)
-    us, ws, worst = [], [], 0.0
+    us, ws, worst, unconverged = [], [], 0.0, 0
     for k in range(vel.shape[0]):
         p, v = pos[k + 1], vel[k]
         t = axis[k + 1] / np.linalg.norm(axis[k + 1], axis=1)[:, None]
@@ -89,8 +93,20 @@ def run_case(case):
         rel = v - big_v
         w = (r[:, 0] * rel[:, 1] - r[:, 1] * rel[:, 0]).sum() / (r * r).sum()
         w_shape = rel - np.stack([-r[:, 1], r[:, 0]], axis=1) * w
-        x, g = solve(r, w_shape, t, mu, x)
+        weight = np.ones(len(p)) if weights is None else weights[k + 1]
+        best = None
+        # Started from the previous sample's answer; where the line search stalls (a heavy element
+        # sliding at almost zero speed makes the residual nearly kinked), from rest and from the mean
+        # shape velocity's opposite too, keeping the smallest residual.
+        for start in (x, np.zeros(3), np.array([-big_v[0], -big_v[1], 0.0])):
+            xs, gs = solve(r, w_shape, t, mu, weight, start)
+            if best is None or np.abs(gs).max() < np.abs(best[1]).max():
+                best = (xs, gs)
+            if np.abs(gs).max() < 1e-11:
+                break
+        x, g = best
         worst = max(worst, float(np.abs(g).max()))
+        unconverged += int(np.abs(g).max() > 1e-8)
         us.append(x[:2].copy())
         ws.append(x[2])
     us = np.array(us)
@@ -98,12 +114,14 @@ def run_case(case):
         "model_velocity": us.mean(axis=0).tolist(),
         "model_rotation": float(np.mean(ws)),
         "worst_residual": worst,
+        "unconverged": unconverged,
+        "samples": len(us),
     }
 
 
 def main():
     spec = json.load(open(sys.argv[1]))
-    out = [run_case(c) for c in spec["cases"]]
+    out = [{"equal": run_case(c, False), "weighted": run_case(c, True)} for c in spec["cases"]]
     json.dump(out, open(f"{sys.argv[2]}/hu_model.json", "w"))
 
 
