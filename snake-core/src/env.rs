@@ -5,6 +5,7 @@ mod action;
 mod config;
 mod observation;
 mod reward;
+mod terrain;
 #[cfg(test)]
 mod tests;
 mod trace;
@@ -23,6 +24,7 @@ pub use config::{
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
+pub use terrain::{PegField, RoughGround, TerrainDistribution};
 pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
@@ -55,6 +57,10 @@ impl EnvBody {
         }
     }
 }
+
+/// On random rough ground a drawn start is raised by the ground's highest point within this many
+/// metres of the origin.
+pub const TERRAIN_START_REACH: f64 = 1.5;
 
 /// Per-episode choices for [`SnakeEnv::reset`].
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -411,7 +417,19 @@ impl SnakeEnv {
             trace.clear();
         }
         let flat = WorldSpec::default();
-        let world = self.config.world.as_ref().map_or(&flat, |w| w.spec());
+        let mut world = self.config.world.as_ref().map_or(&flat, |w| w.spec());
+        // Random terrain takes one more number, after the goal's (none without it).
+        let mut start = start;
+        let laid_out;
+        if let Some(terrain) = &self.config.terrain {
+            let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
+            let seed = rng.gen::<u64>();
+            laid_out = terrain.world(world, &start, goal, seed)?;
+            world = &laid_out;
+            if terrain.rough.is_some() && options.start.is_none() {
+                start.z += world.ground_top(TERRAIN_START_REACH);
+            }
+        }
         let mut body = match &self.config.robot {
             None => EnvBody::Cubes(Snake::in_world(&self.config.snake, start, world)?),
             Some(robot) => EnvBody::Robot(Robot::in_world(robot.spec(), start, world)?),
