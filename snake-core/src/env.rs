@@ -262,6 +262,8 @@ pub struct SnakeEnv {
     path_length: f64,
     /// The latest reset's or step's physics steps, when on.
     trace: Option<PhysicsTrace>,
+    /// The current episode's world, when [`EnvConfig::terrain`] laid one out.
+    episode_world: Option<WorldSpec>,
 }
 
 impl SnakeEnv {
@@ -295,6 +297,7 @@ impl SnakeEnv {
             joints: JointScratch::new(n),
             torques: vec![0.0; n],
             trace: None,
+            episode_world: None,
         })
     }
 
@@ -355,6 +358,12 @@ impl SnakeEnv {
             Some(EnvBody::Cubes(s)) => Some(s),
             _ => None,
         }
+    }
+
+    /// The current episode's world when [`EnvConfig::terrain`] laid one out at the latest reset
+    /// (`None` otherwise: the world is the configuration's).
+    pub fn episode_world(&self) -> Option<&WorldSpec> {
+        self.episode_world.as_ref()
     }
 
     /// The current episode's body, the built-in snake or a robot, if any.
@@ -420,6 +429,7 @@ impl SnakeEnv {
         let mut world = self.config.world.as_ref().map_or(&flat, |w| w.spec());
         // Random terrain takes one more number, after the goal's (none without it).
         let mut start = start;
+        self.episode_world = None;
         let laid_out;
         if let Some(terrain) = &self.config.terrain {
             let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
@@ -430,6 +440,7 @@ impl SnakeEnv {
                 start.z += world.ground_top(TERRAIN_START_REACH);
             }
         }
+        let keep = self.config.terrain.is_some().then(|| world.clone());
         let mut body = match &self.config.robot {
             None => EnvBody::Cubes(Snake::in_world(&self.config.snake, start, world)?),
             Some(robot) => EnvBody::Robot(Robot::in_world(robot.spec(), start, world)?),
@@ -466,6 +477,7 @@ impl SnakeEnv {
             self.config.reward.distance_precision,
         );
         self.snake = Some(body);
+        self.episode_world = keep;
         self.phase = Phase::Running;
         Ok(self.info(RewardTerms::default(), false))
     }

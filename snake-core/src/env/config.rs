@@ -296,14 +296,14 @@ impl EnvConfig {
     }
 
     /// A goal behind a random peg field (`snakesim/SnakePegs-v0`): the goal task's actions,
-    /// observation and reward, a goal 6-9 m from the start within 45 degrees of its heading, and a
+    /// observation and reward, a goal 4-6 m from the start within 45 degrees of its heading, and a
     /// new [`PegField`] at each reset (its defaults: 3 cm pegs 30 cm high on a 0.3 m grid, 70 % of
-    /// the points filled, jittered 8 cm, in a band 3 m wide from 1 m after the start to 1.5 m before
+    /// the points filled, jittered 8 cm, in a band 3 m wide from 1 m after the start to 1 m before
     /// the goal); episodes of at most 900 env steps (30 s).
     pub fn pegs_task(preset: Preset, joints: usize) -> Self {
         EnvConfig {
             goal_distribution: Some(GoalDistribution {
-                distance: [6.0, 9.0],
+                distance: [4.0, 6.0],
                 bearing: [-std::f64::consts::FRAC_PI_4, std::f64::consts::FRAC_PI_4],
             }),
             terrain: Some(TerrainDistribution {
@@ -317,7 +317,7 @@ impl EnvConfig {
 
     /// A goal across random rough ground with hills (`snakesim/SnakeRough-v0`): the goal task's
     /// actions, observation and reward, a goal 5-8 m from the start in any direction, and new
-    /// [`RoughGround`] at each reset (its defaults: 4 cm bumps 0.5 m apart on 30 cm hills 3 m apart,
+    /// [`RoughGround`] at each reset (its defaults: 8 cm bumps 0.5 m apart on 1.2 m hills 3 m apart,
     /// sampled every 0.125 m to 3 m beyond start and goal); the start is raised by the ground's
     /// highest point within 1.5 m of the origin; episodes of at most 900 env steps (30 s).
     pub fn rough_task(preset: Preset, joints: usize) -> Self {

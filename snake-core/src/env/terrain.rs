@@ -48,7 +48,7 @@ pub struct PegField {
     pub width: f64,
     /// Free distance after the start, metres (1.0).
     pub start_clear: f64,
-    /// Free distance before the goal, metres (1.5).
+    /// Free distance before the goal, metres (1.0).
     pub goal_clear: f64,
     /// Lateral friction of every peg, when given (`None`: Bullet's 0.5).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -65,7 +65,7 @@ impl Default for PegField {
             density: 0.7,
             width: 3.0,
             start_clear: 1.0,
-            goal_clear: 1.5,
+            goal_clear: 1.0,
             lateral_friction: None,
         }
     }
@@ -78,11 +78,11 @@ impl Default for PegField {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RoughGround {
-    /// Largest height of the bumps, metres (0.04).
+    /// Largest height of the bumps, metres (0.08).
     pub amplitude: f64,
     /// Distance between the bumps' lattice values, metres (0.5).
     pub wavelength: f64,
-    /// Largest height of the hills, metres (0.3).
+    /// Largest height of the hills, metres (1.2).
     pub hills_amplitude: f64,
     /// Distance between the hills' lattice values, metres (3.0).
     pub hills_wavelength: f64,
@@ -98,9 +98,9 @@ pub struct RoughGround {
 impl Default for RoughGround {
     fn default() -> Self {
         RoughGround {
-            amplitude: 0.04,
+            amplitude: 0.08,
             wavelength: 0.5,
-            hills_amplitude: 0.3,
+            hills_amplitude: 1.2,
             hills_wavelength: 3.0,
             spacing: 0.125,
             margin: 3.0,
@@ -265,5 +265,67 @@ impl TerrainDistribution {
             }
         }
         Ok(world)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn start() -> StartPose {
+        StartPose {
+            x: 0.1,
+            y: -0.2,
+            z: 0.5,
+            yaw: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_seed_gives_one_layout_and_other_seeds_others() {
+        let t = TerrainDistribution {
+            pegs: Some(PegField::default()),
+            rough: Some(RoughGround::default()),
+        };
+        let base = WorldSpec::default();
+        let a = t.world(&base, &start(), (1.0, -5.0), 7).unwrap();
+        assert_eq!(a, t.world(&base, &start(), (1.0, -5.0), 7).unwrap());
+        assert_ne!(a, t.world(&base, &start(), (1.0, -5.0), 8).unwrap());
+        assert!(!a.obstacles.is_empty());
+        // Every peg lies in the band between start and goal.
+        for o in &a.obstacles {
+            let (x, y) = (o.position[0] - 0.1, o.position[1] + 0.2);
+            let d = x.hypot(y);
+            assert!(d > 0.9 && d < 5.1_f64.hypot(1.6), "{:?}", o.position);
+        }
+        let Ground::Heightfield(h) = &a.ground else {
+            panic!("rough ground expected")
+        };
+        // The square reaches 3 m beyond the goal's 5 m.
+        assert!(h.rows as f64 * h.scale[0] >= 16.0);
+    }
+
+    #[test]
+    fn bad_values_are_one_line_naming_the_field() {
+        let mut t = TerrainDistribution {
+            pegs: Some(PegField {
+                density: 1.5,
+                ..PegField::default()
+            }),
+            rough: None,
+        };
+        let e = t.validate().unwrap_err().to_string();
+        assert!(e.contains("terrain.pegs.density"), "{e}");
+        assert!(!e.contains('\n'));
+        t.pegs = Some(PegField {
+            spacing: 0.001,
+            width: 100.0,
+            ..PegField::default()
+        });
+        let e = t
+            .world(&WorldSpec::default(), &start(), (0.0, -50.0), 1)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("terrain.pegs") && e.contains("obstacles"), "{e}");
     }
 }

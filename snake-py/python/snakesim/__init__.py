@@ -31,7 +31,15 @@ from snakesim.envs.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS, PEGS_ENV_DEFAU
 from snakesim.envs.env import SnakeEnv, SnakeGoalEnv, SnakePegsEnv, SnakeRoughEnv
 from snakesim.envs.vector import SnakeVectorEnv
 
-__all__ = ["SnakeEnv", "SnakeGoalEnv", "SnakePegsEnv", "SnakeRoughEnv", "SnakeVectorEnv", "__version__", "register_envs"]
+__all__ = [
+    "SnakeEnv",
+    "SnakeGoalEnv",
+    "SnakePegsEnv",
+    "SnakeRoughEnv",
+    "SnakeVectorEnv",
+    "__version__",
+    "register_envs",
+]
 if extras.available("sb3"):  # without the extra, `from snakesim import *` leaves it out
     __all__.insert(2, "SnakeVecEnv")
 

@@ -256,7 +256,9 @@ def load_agent(
             source.removeprefix(BASELINE_PREFIX), joints, preset, env_overrides, task=task, env_from=env_from
         )
     if task != "goal" or env_from is not None:
-        raise AgentError("--env and --env-from are for baselines: a model evaluates on the env it was trained on")
+        raise AgentError(
+            "--env and --env-from are for baselines: a model evaluates on the env it was trained on"
+        )
     source = Path(source)
     config = None
     normalizer_path = None

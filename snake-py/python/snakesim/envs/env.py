@@ -310,12 +310,12 @@ class SnakePegsEnv(SnakeGoalEnv):
     The goal task (:class:`SnakeGoalEnv`: actions, control rate, observation, reward) with these
     defaults (snake-rl's ``EnvConfig::pegs_task``; docs/tasks.md):
 
-    - **Goal**: drawn at each reset 6-9 m from the start within 45 degrees of its heading
-      (``goal_distribution`` distance [6, 9], bearing [-pi/4, pi/4]); reached within 1 m.
+    - **Goal**: drawn at each reset 4-6 m from the start within 45 degrees of its heading
+      (``goal_distribution`` distance [4, 6], bearing [-pi/4, pi/4]); reached within 1 m.
     - **Pegs** (``terrain={"pegs": ...}``), laid out anew at each reset from the episode's seed: upright
       cylinders of ``radius`` 0.03 m and ``height`` 0.3 m on a grid of ``spacing`` 0.3 m in a band
       ``width`` 3 m wide along the start-goal line, from ``start_clear`` 1 m after the start to
-      ``goal_clear`` 1.5 m before the goal; each grid point holds a peg with probability ``density``
+      ``goal_clear`` 1 m before the goal; each grid point holds a peg with probability ``density``
       0.7 and is moved by up to ``jitter`` 0.08 m along and across.
     - **Episode end**: the goal reached (terminated) or 900 env steps, 30 s (truncated).
 
@@ -332,7 +332,10 @@ class SnakePegsEnv(SnakeGoalEnv):
         **kwargs: Any,
     ) -> None:
         super().__init__(
-            goal_distribution=goal_distribution, max_episode_steps=max_episode_steps, terrain=terrain, **kwargs
+            goal_distribution=goal_distribution,
+            max_episode_steps=max_episode_steps,
+            terrain=terrain,
+            **kwargs,
         )
 
 
@@ -345,7 +348,7 @@ class SnakeRoughEnv(SnakeGoalEnv):
     - **Goal**: drawn at each reset 5-8 m from the start at any bearing (``goal_distribution``
       distance [5, 8]); reached within 1 m.
     - **Ground** (``terrain={"rough": ...}``), drawn anew at each reset from the episode's seed: the sum
-      of bumps (``amplitude`` 0.04 m, ``wavelength`` 0.5 m) and hills (``hills_amplitude`` 0.3 m,
+      of bumps (``amplitude`` 0.08 m, ``wavelength`` 0.5 m) and hills (``hills_amplitude`` 1.2 m,
       ``hills_wavelength`` 3 m), value noise sampled every ``spacing`` 0.125 m over a square reaching
       ``margin`` 3 m beyond start and goal; Bullet's ground friction 0.5. A drawn start is raised by
       the ground's highest point within 1.5 m of the origin.
@@ -364,7 +367,10 @@ class SnakeRoughEnv(SnakeGoalEnv):
         **kwargs: Any,
     ) -> None:
         super().__init__(
-            goal_distribution=goal_distribution, max_episode_steps=max_episode_steps, terrain=terrain, **kwargs
+            goal_distribution=goal_distribution,
+            max_episode_steps=max_episode_steps,
+            terrain=terrain,
+            **kwargs,
         )
 
 
