@@ -5,6 +5,7 @@ mod action;
 mod config;
 mod observation;
 mod reward;
+mod terrain;
 #[cfg(test)]
 mod tests;
 mod trace;
@@ -23,6 +24,7 @@ pub use config::{
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
+pub use terrain::{PegField, RoughGround, TerrainDistribution};
 pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
@@ -55,6 +57,10 @@ impl EnvBody {
         }
     }
 }
+
+/// On random rough ground a drawn start is raised by the ground's highest point within this many
+/// metres of the origin.
+pub const TERRAIN_START_REACH: f64 = 1.5;
 
 /// Per-episode choices for [`SnakeEnv::reset`].
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -256,6 +262,8 @@ pub struct SnakeEnv {
     path_length: f64,
     /// The latest reset's or step's physics steps, when on.
     trace: Option<PhysicsTrace>,
+    /// The current episode's world, when [`EnvConfig::terrain`] laid one out.
+    episode_world: Option<WorldSpec>,
 }
 
 impl SnakeEnv {
@@ -289,6 +297,7 @@ impl SnakeEnv {
             joints: JointScratch::new(n),
             torques: vec![0.0; n],
             trace: None,
+            episode_world: None,
         })
     }
 
@@ -351,6 +360,12 @@ impl SnakeEnv {
         }
     }
 
+    /// The current episode's world when [`EnvConfig::terrain`] laid one out at the latest reset
+    /// (`None` otherwise: the world is the configuration's).
+    pub fn episode_world(&self) -> Option<&WorldSpec> {
+        self.episode_world.as_ref()
+    }
+
     /// The current episode's body, the built-in snake or a robot, if any.
     pub fn simulation(&self) -> Option<&dyn Simulation> {
         self.snake.as_ref().map(EnvBody::sim)
@@ -411,7 +426,21 @@ impl SnakeEnv {
             trace.clear();
         }
         let flat = WorldSpec::default();
-        let world = self.config.world.as_ref().map_or(&flat, |w| w.spec());
+        let mut world = self.config.world.as_ref().map_or(&flat, |w| w.spec());
+        // Random terrain takes one more number, after the goal's (none without it).
+        let mut start = start;
+        self.episode_world = None;
+        let laid_out;
+        if let Some(terrain) = &self.config.terrain {
+            let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
+            let seed = rng.gen::<u64>();
+            laid_out = terrain.world(world, &start, goal, seed)?;
+            world = &laid_out;
+            if terrain.rough.is_some() && options.start.is_none() {
+                start.z += world.ground_top(TERRAIN_START_REACH);
+            }
+        }
+        let keep = self.config.terrain.is_some().then(|| world.clone());
         let mut body = match &self.config.robot {
             None => EnvBody::Cubes(Snake::in_world(&self.config.snake, start, world)?),
             Some(robot) => EnvBody::Robot(Robot::in_world(robot.spec(), start, world)?),
@@ -448,6 +477,7 @@ impl SnakeEnv {
             self.config.reward.distance_precision,
         );
         self.snake = Some(body);
+        self.episode_world = keep;
         self.phase = Phase::Running;
         Ok(self.info(RewardTerms::default(), false))
     }

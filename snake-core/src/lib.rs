@@ -51,8 +51,8 @@ pub mod world_file;
 pub use config::{Preset, SnakeConfig};
 pub use env::{
     ActionConfig, ActionMode, DistancePrecision, EnvConfig, GoalDistribution, Info,
-    ObservationLayout, ResetOptions, RewardConfig, RewardTerms, SnakeEnv, StartDistribution,
-    StepOutcome, StepResult, Task,
+    ObservationLayout, PegField, ResetOptions, RewardConfig, RewardTerms, RoughGround, SnakeEnv,
+    StartDistribution, StepOutcome, StepResult, Task, TerrainDistribution,
 };
 pub use error::{Error, Result};
 pub use gait::{

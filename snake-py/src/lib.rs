@@ -143,6 +143,19 @@ impl Env {
         self.with(py, |e| e.config().joints())
     }
 
+    /// The current episode's world as a viewer draws it (JSON: ground, obstacles): the laid-out
+    /// terrain of the latest reset, else the configuration's world file, else the flat plane.
+    fn world_json(&self, py: Python<'_>) -> String {
+        self.with(py, |e| {
+            let flat = snake_core::world_file::WorldSpec::default();
+            let spec = e
+                .episode_world()
+                .or_else(|| e.config().world.as_ref().map(|w| w.spec()))
+                .unwrap_or(&flat);
+            serde_json::to_string(&spec.drawing()).expect("a drawing serialises")
+        })
+    }
+
     /// Length of an action (the joints, or 3 in the gait action mode).
     #[getter]
     fn action_dim(&self, py: Python<'_>) -> usize {

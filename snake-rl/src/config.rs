@@ -539,6 +539,8 @@ pub fn env_keyword_defaults(task: Task) -> Map<String, Value> {
     map.entry("robot").or_insert(Value::Null);
     // No world file: the flat plane.
     map.entry("world").or_insert(Value::Null);
+    // No random terrain.
+    map.entry("terrain").or_insert(Value::Null);
     map
 }
 

@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::action::{ActionConfig, ActionMode};
 use super::reward::RewardConfig;
+use super::terrain::{PegField, RoughGround, TerrainDistribution};
 use crate::config::{Preset, SnakeConfig};
 use crate::error::{invalid, Result};
 use crate::limits::{
@@ -42,6 +43,10 @@ pub struct EnvConfig {
     pub goal: (f64, f64),
     /// Draw each episode's goal relative to its start pose instead of using `goal` (`None`).
     pub goal_distribution: Option<GoalDistribution>,
+    /// Random terrain laid out anew at each reset from the episode's stream, after the goal: a peg
+    /// field between start and goal, rough ground, or both, added to `world` (`None`: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub terrain: Option<TerrainDistribution>,
     /// The episode terminates (successfully) when the distance to the goal is below this (1.0 m).
     pub goal_radius: f64,
     /// Env steps after which an episode is truncated (5000, gym's `TimeLimit` of `Snake-v0`).
@@ -69,6 +74,7 @@ impl Default for EnvConfig {
             world: None,
             goal: (0.0, -10.0),
             goal_distribution: None,
+            terrain: None,
             goal_radius: 1.0,
             max_episode_steps: 5000,
             physics_steps_per_env_step: 1,
@@ -257,17 +263,23 @@ pub enum Task {
     Paper,
     /// Goal reaching (`SnakeGoal-v0`): see [`EnvConfig::goal_task`].
     Goal,
+    /// A goal behind a random peg field (`SnakePegs-v0`): see [`EnvConfig::pegs_task`].
+    Pegs,
+    /// A goal across random rough ground with hills (`SnakeRough-v0`): see [`EnvConfig::rough_task`].
+    Rough,
 }
 
 impl Task {
     /// Both tasks.
-    pub const ALL: [Task; 2] = [Task::Paper, Task::Goal];
+    pub const ALL: [Task; 4] = [Task::Paper, Task::Goal, Task::Pegs, Task::Rough];
 
     /// The configuration name.
     pub fn name(self) -> &'static str {
         match self {
             Task::Paper => "paper",
             Task::Goal => "goal",
+            Task::Pegs => "pegs",
+            Task::Rough => "rough",
         }
     }
 }
@@ -278,6 +290,48 @@ impl EnvConfig {
         match task {
             Task::Paper => EnvConfig::with_preset(preset, joints),
             Task::Goal => EnvConfig::goal_task(preset, joints),
+            Task::Pegs => EnvConfig::pegs_task(preset, joints),
+            Task::Rough => EnvConfig::rough_task(preset, joints),
+        }
+    }
+
+    /// A goal behind a random peg field (`snakesim/SnakePegs-v0`): the goal task's actions,
+    /// observation and reward, a goal 4-6 m from the start within 45 degrees of its heading, and a
+    /// new [`PegField`] at each reset (its defaults: 3 cm pegs 30 cm high on a 0.3 m grid, 70 % of
+    /// the points filled, jittered 8 cm, in a band 3 m wide from 1 m after the start to 1 m before
+    /// the goal); episodes of at most 900 env steps (30 s).
+    pub fn pegs_task(preset: Preset, joints: usize) -> Self {
+        EnvConfig {
+            goal_distribution: Some(GoalDistribution {
+                distance: [4.0, 6.0],
+                bearing: [-std::f64::consts::FRAC_PI_4, std::f64::consts::FRAC_PI_4],
+            }),
+            terrain: Some(TerrainDistribution {
+                pegs: Some(PegField::default()),
+                rough: None,
+            }),
+            max_episode_steps: 900,
+            ..EnvConfig::goal_task(preset, joints)
+        }
+    }
+
+    /// A goal across random rough ground with hills (`snakesim/SnakeRough-v0`): the goal task's
+    /// actions, observation and reward, a goal 5-8 m from the start in any direction, and new
+    /// [`RoughGround`] at each reset (its defaults: 8 cm bumps 0.5 m apart on 1.2 m hills 3 m apart,
+    /// sampled every 0.125 m to 3 m beyond start and goal); the start is raised by the ground's
+    /// highest point within 1.5 m of the origin; episodes of at most 900 env steps (30 s).
+    pub fn rough_task(preset: Preset, joints: usize) -> Self {
+        EnvConfig {
+            goal_distribution: Some(GoalDistribution {
+                distance: [5.0, 8.0],
+                ..GoalDistribution::default()
+            }),
+            terrain: Some(TerrainDistribution {
+                pegs: None,
+                rough: Some(RoughGround::default()),
+            }),
+            max_episode_steps: 900,
+            ..EnvConfig::goal_task(preset, joints)
         }
     }
 
@@ -385,6 +439,9 @@ impl EnvConfig {
         self.start.validate()?;
         if let Some(goals) = &self.goal_distribution {
             goals.validate()?;
+        }
+        if let Some(terrain) = &self.terrain {
+            terrain.validate()?;
         }
         self.action.validate()?;
         if !(self.action_scale.is_finite()

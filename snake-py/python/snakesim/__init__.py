@@ -27,26 +27,39 @@ import gymnasium
 
 from snakesim import extras
 from snakesim._core import __version__
-from snakesim.envs.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS
-from snakesim.envs.env import SnakeEnv, SnakeGoalEnv
+from snakesim.envs.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS, PEGS_ENV_DEFAULTS, ROUGH_ENV_DEFAULTS
+from snakesim.envs.env import SnakeEnv, SnakeGoalEnv, SnakePegsEnv, SnakeRoughEnv
 from snakesim.envs.vector import SnakeVectorEnv
 
-__all__ = ["SnakeEnv", "SnakeGoalEnv", "SnakeVectorEnv", "__version__", "register_envs"]
+__all__ = [
+    "SnakeEnv",
+    "SnakeGoalEnv",
+    "SnakePegsEnv",
+    "SnakeRoughEnv",
+    "SnakeVectorEnv",
+    "__version__",
+    "register_envs",
+]
 if extras.available("sb3"):  # without the extra, `from snakesim import *` leaves it out
     __all__.insert(2, "SnakeVecEnv")
 
 ENV_ID = "snakesim/Snake-v0"
 GOAL_ENV_ID = "snakesim/SnakeGoal-v0"
+PEGS_ENV_ID = "snakesim/SnakePegs-v0"
+ROUGH_ENV_ID = "snakesim/SnakeRough-v0"
 
 
 def register_envs() -> None:
-    """Registers ``snakesim/Snake-v0`` and ``snakesim/SnakeGoal-v0`` with Gymnasium (done on import)."""
+    """Registers ``snakesim/Snake-v0``, ``snakesim/SnakeGoal-v0``, ``snakesim/SnakePegs-v0`` and
+    ``snakesim/SnakeRough-v0`` with Gymnasium (done on import)."""
     # gymnasium.make wraps the env in a TimeLimit of the spec's max_episode_steps (the task's default),
     # or of T with gymnasium.make(..., max_episode_steps=T). That wrapper alone truncates: the env is
     # made with max_episode_steps=None (no limit of its own), so that T may also exceed the default.
     for env_id, entry_point, defaults in (
         (ENV_ID, "snakesim.envs.env:SnakeEnv", ENV_DEFAULTS),
         (GOAL_ENV_ID, "snakesim.envs.env:SnakeGoalEnv", GOAL_ENV_DEFAULTS),
+        (PEGS_ENV_ID, "snakesim.envs.env:SnakePegsEnv", PEGS_ENV_DEFAULTS),
+        (ROUGH_ENV_ID, "snakesim.envs.env:SnakeRoughEnv", ROUGH_ENV_DEFAULTS),
     ):
         if env_id not in gymnasium.registry:
             gymnasium.register(

@@ -239,16 +239,26 @@ def load_agent(
     preset: str | None = None,
     env_overrides: Mapping[str, Any] | None = None,
     device: str = "cpu",
+    task: str = "goal",
+    env_from: str | os.PathLike | None = None,
 ) -> Agent:
     """A run directory (its final model, else its latest checkpoint; its config.yaml), a bare SB3 zip
     or a native ``.safetensors`` model.
 
     For a run directory, ``joints`` and ``preset`` must agree with its config when given. For a bare
     zip, ``joints`` defaults to what the model's action space says and ``preset`` to ``paper``; a
-    native model file names its own env.
+    native model file names its own env. A baseline (``baseline:NAME``) runs in ``task``'s env
+    (``goal``, ``pegs``, ``rough``), or with ``env_from`` (a model or run directory) in exactly the env
+    recorded there.
     """
     if isinstance(source, str) and source.startswith(BASELINE_PREFIX):
-        return _load_baseline(source.removeprefix(BASELINE_PREFIX), joints, preset, env_overrides)
+        return _load_baseline(
+            source.removeprefix(BASELINE_PREFIX), joints, preset, env_overrides, task=task, env_from=env_from
+        )
+    if task != "goal" or env_from is not None:
+        raise AgentError(
+            "--env and --env-from are for baselines: a model evaluates on the env it was trained on"
+        )
     source = Path(source)
     config = None
     normalizer_path = None
@@ -330,21 +340,41 @@ def load_agent(
 BASELINE_PREFIX = "baseline:"
 
 
+def env_kwargs_of(source: str | os.PathLike) -> dict[str, Any]:
+    """The env keywords recorded in a model's metadata or a run directory (what :func:`load_agent`
+    would evaluate the agent on), for running a baseline on exactly that env."""
+    if isinstance(source, str) and source.startswith(BASELINE_PREFIX):
+        raise AgentError(f"--env-from needs a model or a run directory, not {source}")
+    return dict(load_agent(source).env_kwargs)
+
+
 def _load_baseline(
-    name: str, joints: int | None, preset: str | None, env_overrides: Mapping[str, Any] | None
+    name: str,
+    joints: int | None,
+    preset: str | None,
+    env_overrides: Mapping[str, Any] | None,
+    *,
+    task: str = "goal",
+    env_from: str | os.PathLike | None = None,
 ) -> Agent:
-    """A baseline controller in the goal task (``snakesim/SnakeGoal-v0``) with ``joints`` (5) and
-    ``preset`` (paper)."""
+    """A baseline controller in ``task``'s env (the goal task, ``snakesim/SnakeGoal-v0``, unless
+    told) with ``joints`` (5) and ``preset`` (paper), or in exactly the env recorded in
+    ``env_from`` (a model or a run directory)."""
     from snakesim.agents import baselines
     from snakesim.envs.config import GOAL_ENV_DEFAULTS
     from snakesim.envs.env import make_env
 
-    env_kwargs: dict[str, Any] = {
-        "task": "goal",
-        "joints": GOAL_ENV_DEFAULTS["joints"] if joints is None else joints,
-        "preset": GOAL_ENV_DEFAULTS["preset"] if preset is None else preset,
-        **(env_overrides or {}),
-    }
+    if env_from is not None:
+        if joints is not None or preset is not None:
+            raise AgentError(f"--env-from takes joints and preset from {os.fspath(env_from)}: leave them out")
+        env_kwargs: dict[str, Any] = {**env_kwargs_of(env_from), **(env_overrides or {})}
+    else:
+        env_kwargs = {
+            "task": task,
+            "joints": GOAL_ENV_DEFAULTS["joints"] if joints is None else joints,
+            "preset": GOAL_ENV_DEFAULTS["preset"] if preset is None else preset,
+            **(env_overrides or {}),
+        }
     try:
         probe = make_env(**env_kwargs)
         baselines.check_env(probe.config)

@@ -92,4 +92,13 @@ def load_agent(args: argparse.Namespace):
     if getattr(args, "goal", None) is not None:
         # A fixed goal instead of the task's: e.g. the paper's (0, -10) for a goal-task agent.
         overrides = {"goal": args.goal, "goal_distribution": None}
-    return load_agent(args.source, joints=args.joints, preset=args.preset, env_overrides=overrides)
+    if getattr(args, "robot", None) is not None:
+        overrides = {**(overrides or {}), "robot": args.robot}
+    return load_agent(
+        args.source,
+        joints=args.joints,
+        preset=args.preset,
+        env_overrides=overrides,
+        task=getattr(args, "env", None) or "goal",
+        env_from=getattr(args, "env_from", None),
+    )

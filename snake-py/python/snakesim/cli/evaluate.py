@@ -11,6 +11,35 @@ from snakesim.cli.args import agent_options, episodes, goal, load_agent
 from snakesim.cli.errors import UserError, check_writable
 from snakesim.files import write_atomically
 
+#: Gymnasium ids of the tasks a baseline runs in, by task name.
+TASK_IDS = {
+    "goal": "snakesim/SnakeGoal-v0",
+    "pegs": "snakesim/SnakePegs-v0",
+    "rough": "snakesim/SnakeRough-v0",
+}
+
+
+def task_name(text: str) -> str:
+    """``--env``: a task name or its Gymnasium id, as the task name."""
+    for name, env_id in TASK_IDS.items():
+        if text in (name, env_id):
+            return name
+    raise argparse.ArgumentTypeError(
+        f"unknown task {text!r} (expected one of: {', '.join(TASK_IDS)}, or {', '.join(TASK_IDS.values())})"
+    )
+
+
+def env_line(agent) -> str:
+    """The evaluated env in words: task, body, joints."""
+    kwargs = agent.env_kwargs
+    task = kwargs.get("task")
+    terrain = kwargs.get("terrain") or {}
+    if task is None:
+        task = "pegs" if terrain.get("pegs") else "rough" if terrain.get("rough") else None
+    body = f"robot {kwargs['robot']}" if kwargs.get("robot") else f"preset {kwargs['preset']}"
+    prefix = "" if task is None else f"task {task}, "
+    return f"{prefix}{agent.joints} joints, {body}"
+
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from snakesim.agents.evaluation import evaluate
@@ -53,7 +82,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     rows = [
         ("model", f"{agent.path} ({label}, {trainer})"),
-        ("env", f"{agent.joints} joints, preset {report['preset']}"),
+        ("env", env_line(agent)),
         (
             "episodes",
             f"{report['episodes']} (seed {args.seed}, {mode})",
@@ -84,6 +113,19 @@ def add_parser(sub) -> None:
         type=goal,
         metavar="X,Y",
         help="a fixed goal instead of the agent's task's (e.g. 0,-10: the paper's task)",
+    )
+    p.add_argument(
+        "--env",
+        type=task_name,
+        metavar="TASK",
+        help="for a baseline: the task, goal (default), pegs or rough, or its Gymnasium id "
+        "(snakesim/SnakePegs-v0)",
+    )
+    p.add_argument("--robot", metavar="FILE", help="for a baseline: a robot file instead of the cube snake")
+    p.add_argument(
+        "--env-from",
+        metavar="MODEL",
+        help="for a baseline: exactly the env recorded in MODEL (a native model or a run directory)",
     )
     p.add_argument("--episodes", type=episodes, default=100, help="episodes (default 100)")
     p.add_argument(

@@ -14,6 +14,8 @@ from gymnasium import spaces
 from snakesim import _core
 from snakesim.envs.config import ENV_DEFAULTS as _D
 from snakesim.envs.config import GOAL_ENV_DEFAULTS as _G
+from snakesim.envs.config import PEGS_ENV_DEFAULTS as _P
+from snakesim.envs.config import ROUGH_ENV_DEFAULTS as _R
 from snakesim.envs.config import action_array, env_config
 from snakesim.envs.render import top_down
 
@@ -105,6 +107,7 @@ class SnakeEnv(gymnasium.Env):
         snake: Mapping[str, Any] | None = None,
         robot: str | os.PathLike[str] | None = _D["robot"],
         world: str | os.PathLike[str] | None = _D["world"],
+        terrain: Mapping[str, Any] | None = _D["terrain"],
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -126,6 +129,7 @@ class SnakeEnv(gymnasium.Env):
             snake=snake,
             robot=None if robot is None else os.fspath(robot),
             world=None if world is None else os.fspath(world),
+            terrain=terrain,
         )
         self._config_json = env_config(task=self.task, **self._kwargs)
         self._env = _core.Env(self._config_json)
@@ -276,6 +280,7 @@ class SnakeGoalEnv(SnakeEnv):
         snake: Mapping[str, Any] | None = None,
         robot: str | os.PathLike[str] | None = _G["robot"],
         world: str | os.PathLike[str] | None = _G["world"],
+        terrain: Mapping[str, Any] | None = _G["terrain"],
         render_mode: str | None = None,
     ) -> None:
         super().__init__(
@@ -294,12 +299,85 @@ class SnakeGoalEnv(SnakeEnv):
             snake=snake,
             robot=robot,
             world=world,
+            terrain=terrain,
             render_mode=render_mode,
         )
 
 
+class SnakePegsEnv(SnakeGoalEnv):
+    """A goal behind a random peg field that a steered gait jams in: ``snakesim/SnakePegs-v0``.
+
+    The goal task (:class:`SnakeGoalEnv`: actions, control rate, observation, reward) with these
+    defaults (snake-rl's ``EnvConfig::pegs_task``; docs/tasks.md):
+
+    - **Goal**: drawn at each reset 4-6 m from the start within 45 degrees of its heading
+      (``goal_distribution`` distance [4, 6], bearing [-pi/4, pi/4]); reached within 1 m.
+    - **Pegs** (``terrain={"pegs": ...}``), laid out anew at each reset from the episode's seed: upright
+      cylinders of ``radius`` 0.03 m and ``height`` 0.3 m on a grid of ``spacing`` 0.3 m in a band
+      ``width`` 3 m wide along the start-goal line, from ``start_clear`` 1 m after the start to
+      ``goal_clear`` 1 m before the goal; each grid point holds a peg with probability ``density``
+      0.7 and is moved by up to ``jitter`` 0.08 m along and across.
+    - **Episode end**: the goal reached (terminated) or 900 env steps, 30 s (truncated).
+
+    ``robot=`` puts a robot file's robot in the same task. **Version history**: v0.
+    """
+
+    task = "pegs"
+
+    def __init__(
+        self,
+        goal_distribution: Mapping[str, Any] | None = _P["goal_distribution"],
+        max_episode_steps: int | None = _P["max_episode_steps"],
+        terrain: Mapping[str, Any] | None = _P["terrain"],
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(
+            goal_distribution=goal_distribution,
+            max_episode_steps=max_episode_steps,
+            terrain=terrain,
+            **kwargs,
+        )
+
+
+class SnakeRoughEnv(SnakeGoalEnv):
+    """A goal across random rough ground with hills: ``snakesim/SnakeRough-v0``.
+
+    The goal task (:class:`SnakeGoalEnv`: actions, control rate, observation, reward) with these
+    defaults (snake-rl's ``EnvConfig::rough_task``; docs/tasks.md):
+
+    - **Goal**: drawn at each reset 5-8 m from the start at any bearing (``goal_distribution``
+      distance [5, 8]); reached within 1 m.
+    - **Ground** (``terrain={"rough": ...}``), drawn anew at each reset from the episode's seed: the sum
+      of bumps (``amplitude`` 0.08 m, ``wavelength`` 0.5 m) and hills (``hills_amplitude`` 1.2 m,
+      ``hills_wavelength`` 3 m), value noise sampled every ``spacing`` 0.125 m over a square reaching
+      ``margin`` 3 m beyond start and goal; Bullet's ground friction 0.5. A drawn start is raised by
+      the ground's highest point within 1.5 m of the origin.
+    - **Episode end**: the goal reached (terminated) or 900 env steps, 30 s (truncated).
+
+    ``robot=`` puts a robot file's robot in the same task. **Version history**: v0.
+    """
+
+    task = "rough"
+
+    def __init__(
+        self,
+        goal_distribution: Mapping[str, Any] | None = _R["goal_distribution"],
+        max_episode_steps: int | None = _R["max_episode_steps"],
+        terrain: Mapping[str, Any] | None = _R["terrain"],
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(
+            goal_distribution=goal_distribution,
+            max_episode_steps=max_episode_steps,
+            terrain=terrain,
+            **kwargs,
+        )
+
+
 #: The env class of each task.
-TASK_ENVS: dict[str, type[SnakeEnv]] = {SnakeEnv.task: SnakeEnv, SnakeGoalEnv.task: SnakeGoalEnv}
+TASK_ENVS: dict[str, type[SnakeEnv]] = {
+    cls.task: cls for cls in (SnakeEnv, SnakeGoalEnv, SnakePegsEnv, SnakeRoughEnv)
+}
 
 
 def make_env(task: str = SnakeEnv.task, **kwargs: Any) -> SnakeEnv:

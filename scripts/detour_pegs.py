@@ -1,0 +1,53 @@
+"""A hand-tuned detour controller for snakesim/SnakePegs-v0: it steers the wave first to a waypoint
+beside the peg band (2.5 m to the side of the band's middle), then to the goal. It shows that the
+goal is reachable around the field (docs/tasks.md). Usage: detour_pegs.py [EPISODES] [SEED] [JOINTS]."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import gymnasium
+import numpy as np
+import snakesim  # noqa: F401  (registers the envs)
+
+
+def bearing(obs: np.ndarray, joints: int, target: tuple[float, float]) -> float:
+    """Bearing of ``target`` from the head, radians (0 ahead, positive to the left)."""
+    x, y = float(obs[0]), float(obs[1])
+    s, c = float(obs[4 + 2 * joints]), float(obs[5 + 2 * joints])
+    vx, vy = target[0] - x, target[1] - y
+    # The head frame: the goal vector's convention (ahead = -y, left = +x) at heading yaw.
+    hx = c * vx + s * vy
+    hy = -s * vx + c * vy
+    return math.atan2(hx, -hy)
+
+
+def main() -> None:
+    episodes = int(sys.argv[1]) if len(sys.argv) > 1 else 20
+    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    joints = int(sys.argv[3]) if len(sys.argv) > 3 else 10
+    side = float(sys.argv[4]) if len(sys.argv) > 4 else 2.5
+    env = gymnasium.make("snakesim/SnakePegs-v0", joints=joints)
+    wins = 0
+    for k in range(episodes):
+        obs, info = env.reset(seed=seed + k)
+        (sx, sy), (gx, gy) = info["start"][:2], info["goal"]
+        d = math.hypot(gx - sx, gy - sy)
+        ux, uy = (gx - sx) / d, (gy - sy) / d
+        waypoints = [(sx + 0.5 * d * ux - side * uy, sy + 0.5 * d * uy + side * ux), (gx, gy)]
+        done = False
+        while not done:
+            target = waypoints[0]
+            if len(waypoints) > 1 and math.hypot(target[0] - obs[0], target[1] - obs[1]) < 1.0:
+                waypoints.pop(0)
+                target = waypoints[0]
+            steer = float(np.clip(-bearing(obs, joints, target), -1.0, 1.0))
+            obs, _, terminated, truncated, info = env.step(np.array([steer, 0.0, 0.0], np.float32))
+            done = terminated or truncated
+        wins += bool(terminated)
+    print(f"detour: {wins}/{episodes} episodes reached the goal (seeds {seed}-{seed + episodes - 1})")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,331 @@
+//! Random terrain per episode: a peg field between the start and the goal, and rough ground with
+//! hills, drawn from the episode's random stream at each reset (docs/tasks.md).
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{invalid, Result};
+use crate::limits::{
+    check_range, MAX_HEIGHTFIELD_SAMPLES, MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES, MAX_OBSTACLE_SIZE,
+    MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
+};
+use crate::math::StartPose;
+use crate::world_file::{rough_heights, Ground, Heightfield, Obstacle, ObstacleShape, WorldSpec};
+
+/// What each episode's world adds to the env's world (or to the flat plane): a peg field, rough
+/// ground, or both. The env draws one `u64` from its episode stream after the goal and seeds the
+/// layout with it (ChaCha8), so a reset seed gives one layout and other seeds other layouts.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TerrainDistribution {
+    /// A peg field in a band from the start towards the goal (`None`: no pegs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pegs: Option<PegField>,
+    /// Rough ground replacing the ground (`None`: the world's ground).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rough: Option<RoughGround>,
+}
+
+/// Upright cylinders on a jittered grid in the frame of the line from the start to the goal: grid
+/// points `along = start_clear + i * spacing` (up to the goal's distance less `goal_clear`) and
+/// `across = -width / 2 + j * spacing` (up to `width / 2`), each kept with probability `density`
+/// and moved by uniform draws in [-jitter, jitter] along and across.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PegField {
+    /// Grid spacing, metres (0.3).
+    pub spacing: f64,
+    /// Peg radius, metres (0.03).
+    pub radius: f64,
+    /// Peg height, metres (0.3).
+    pub height: f64,
+    /// Largest move of a peg along and across, metres (0.08).
+    pub jitter: f64,
+    /// Probability that a grid point holds a peg (0.7).
+    pub density: f64,
+    /// Width of the band, metres, centred on the start-goal line (3.0).
+    pub width: f64,
+    /// Free distance after the start, metres (1.0).
+    pub start_clear: f64,
+    /// Free distance before the goal, metres (1.0).
+    pub goal_clear: f64,
+    /// Lateral friction of every peg, when given (`None`: Bullet's 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lateral_friction: Option<f64>,
+}
+
+impl Default for PegField {
+    fn default() -> Self {
+        PegField {
+            spacing: 0.3,
+            radius: 0.03,
+            height: 0.3,
+            jitter: 0.08,
+            density: 0.7,
+            width: 3.0,
+            start_clear: 1.0,
+            goal_clear: 1.0,
+            lateral_friction: None,
+        }
+    }
+}
+
+/// Rough ground: the sum of two value-noise octaves (`ground.rough` of docs/worlds.md), bumps
+/// (`amplitude`, `wavelength`) and hills (`hills_amplitude`, `hills_wavelength`: the slopes),
+/// sampled every `spacing` over a square centred on the origin that reaches `margin` beyond the
+/// start and the goal.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RoughGround {
+    /// Largest height of the bumps, metres (0.08).
+    pub amplitude: f64,
+    /// Distance between the bumps' lattice values, metres (0.5).
+    pub wavelength: f64,
+    /// Largest height of the hills, metres (1.2).
+    pub hills_amplitude: f64,
+    /// Distance between the hills' lattice values, metres (3.0).
+    pub hills_wavelength: f64,
+    /// Grid spacing, metres (0.125).
+    pub spacing: f64,
+    /// Ground beyond the start and the goal, metres (3.0).
+    pub margin: f64,
+    /// The ground's lateral friction, when given (`None`: Bullet's 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
+}
+
+impl Default for RoughGround {
+    fn default() -> Self {
+        RoughGround {
+            amplitude: 0.08,
+            wavelength: 0.5,
+            hills_amplitude: 1.2,
+            hills_wavelength: 3.0,
+            spacing: 0.125,
+            margin: 3.0,
+            friction: None,
+        }
+    }
+}
+
+fn size(what: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 && v <= MAX_OBSTACLE_SIZE {
+        Ok(())
+    } else {
+        Err(invalid(format!(
+            "{what} must be in (0, {MAX_OBSTACLE_SIZE}] m, got {v:?}"
+        )))
+    }
+}
+
+fn friction(what: &str, v: Option<f64>) -> Result<()> {
+    v.map_or(Ok(()), |f| check_range(what, f, 0.0, MAX_WORLD_FRICTION))
+}
+
+impl TerrainDistribution {
+    /// Checks every field; the one-line error names it (`terrain.pegs.spacing ...`).
+    pub fn validate(&self) -> Result<()> {
+        if let Some(p) = &self.pegs {
+            size("terrain.pegs.spacing", p.spacing)?;
+            size("terrain.pegs.radius", p.radius)?;
+            size("terrain.pegs.height", p.height)?;
+            size("terrain.pegs.width", p.width)?;
+            check_range("terrain.pegs.jitter", p.jitter, 0.0, MAX_OBSTACLE_SIZE)?;
+            check_range("terrain.pegs.density", p.density, 0.0, 1.0)?;
+            check_range(
+                "terrain.pegs.start_clear",
+                p.start_clear,
+                0.0,
+                MAX_OBSTACLE_SIZE,
+            )?;
+            check_range(
+                "terrain.pegs.goal_clear",
+                p.goal_clear,
+                0.0,
+                MAX_OBSTACLE_SIZE,
+            )?;
+            friction("terrain.pegs.lateral_friction", p.lateral_friction)?;
+        }
+        if let Some(r) = &self.rough {
+            check_range(
+                "terrain.rough.amplitude",
+                r.amplitude,
+                0.0,
+                MAX_TERRAIN_HEIGHT,
+            )?;
+            check_range(
+                "terrain.rough.hills_amplitude",
+                r.hills_amplitude,
+                0.0,
+                MAX_TERRAIN_HEIGHT,
+            )?;
+            size("terrain.rough.wavelength", r.wavelength)?;
+            size("terrain.rough.hills_wavelength", r.hills_wavelength)?;
+            size("terrain.rough.spacing", r.spacing)?;
+            check_range("terrain.rough.margin", r.margin, 0.0, MAX_OBSTACLE_SIZE)?;
+            friction("terrain.rough.friction", r.friction)?;
+        }
+        Ok(())
+    }
+
+    /// The episode's world: `base` with the rough ground and the pegs for a start at `start` and a
+    /// goal at `goal`, laid out from `seed`. Errors (too many pegs, too large a grid) are one line.
+    pub fn world(
+        &self,
+        base: &WorldSpec,
+        start: &StartPose,
+        goal: (f64, f64),
+        seed: u64,
+    ) -> Result<WorldSpec> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut world = base.clone();
+        if let Some(r) = &self.rough {
+            // The lattice seeds first, so that the pegs' draws do not move them.
+            let (bumps, hills) = (rng.gen::<u64>(), rng.gen::<u64>());
+            let reach = start
+                .x
+                .abs()
+                .max(start.y.abs())
+                .max(goal.0.abs())
+                .max(goal.1.abs());
+            let half = reach + r.margin;
+            let side = (2.0 * half / r.spacing).ceil() + 1.0;
+            if side > MAX_HEIGHTFIELD_SIDE as f64 || side * side > MAX_HEIGHTFIELD_SAMPLES as f64 {
+                return Err(invalid(format!(
+                    "terrain.rough: {side} x {side} samples for start and goal {:.1} m from the origin, more than {MAX_HEIGHTFIELD_SIDE} a side or {MAX_HEIGHTFIELD_SAMPLES} in all: raise spacing",
+                    reach
+                )));
+            }
+            let n = side as usize;
+            let a = rough_heights(r.amplitude, r.wavelength, bumps, n, n, r.spacing);
+            let b = rough_heights(
+                r.hills_amplitude,
+                r.hills_wavelength,
+                hills,
+                n,
+                n,
+                r.spacing,
+            );
+            let heights = a.iter().zip(&b).map(|(x, y)| x + y).collect();
+            world.ground = Ground::Heightfield(Heightfield {
+                rows: n,
+                columns: n,
+                heights,
+                scale: [r.spacing, r.spacing, 1.0],
+            });
+            if r.friction.is_some() {
+                world.ground_friction = r.friction;
+            }
+        }
+        if let Some(p) = &self.pegs {
+            let (dx, dy) = (goal.0 - start.x, goal.1 - start.y);
+            let distance = dx.hypot(dy);
+            let (ux, uy) = if distance > 0.0 {
+                (dx / distance, dy / distance)
+            } else {
+                (0.0, -1.0)
+            };
+            let end = distance - p.goal_clear;
+            let along = if end >= p.start_clear {
+                ((end - p.start_clear) / p.spacing).floor() + 1.0
+            } else {
+                0.0
+            };
+            let across = (p.width / p.spacing).floor() + 1.0;
+            if along * across + world.obstacles.len() as f64 > MAX_OBSTACLES as f64 {
+                return Err(invalid(format!(
+                    "terrain.pegs: {along} x {across} grid points, more than the {MAX_OBSTACLES} obstacles a world may have"
+                )));
+            }
+            for i in 0..along as usize {
+                for j in 0..across as usize {
+                    let keep = rng.gen::<f64>() < p.density;
+                    let ja = rng.gen_range(-p.jitter..=p.jitter);
+                    let jc = rng.gen_range(-p.jitter..=p.jitter);
+                    if !keep {
+                        continue;
+                    }
+                    let s = p.start_clear + i as f64 * p.spacing + ja;
+                    let c = -0.5 * p.width + j as f64 * p.spacing + jc;
+                    // `c` to the left of the direction (ux, uy): the direction turned by +90 deg.
+                    let x = start.x + s * ux - c * uy;
+                    let y = start.y + s * uy + c * ux;
+                    crate::limits::check_position("terrain.pegs: a peg's position", x, y)?;
+                    world.obstacles.push(Obstacle {
+                        shape: ObstacleShape::Cylinder {
+                            radius: p.radius,
+                            height: p.height,
+                        },
+                        position: [x, y, 0.5 * p.height],
+                        yaw: 0.0,
+                        lateral_friction: p.lateral_friction,
+                    });
+                }
+            }
+        }
+        Ok(world)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn start() -> StartPose {
+        StartPose {
+            x: 0.1,
+            y: -0.2,
+            z: 0.5,
+            yaw: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_seed_gives_one_layout_and_other_seeds_others() {
+        let t = TerrainDistribution {
+            pegs: Some(PegField::default()),
+            rough: Some(RoughGround::default()),
+        };
+        let base = WorldSpec::default();
+        let a = t.world(&base, &start(), (1.0, -5.0), 7).unwrap();
+        assert_eq!(a, t.world(&base, &start(), (1.0, -5.0), 7).unwrap());
+        assert_ne!(a, t.world(&base, &start(), (1.0, -5.0), 8).unwrap());
+        assert!(!a.obstacles.is_empty());
+        // Every peg lies in the band between start and goal.
+        for o in &a.obstacles {
+            let (x, y) = (o.position[0] - 0.1, o.position[1] + 0.2);
+            let d = x.hypot(y);
+            assert!(d > 0.9 && d < 5.1_f64.hypot(1.6), "{:?}", o.position);
+        }
+        let Ground::Heightfield(h) = &a.ground else {
+            panic!("rough ground expected")
+        };
+        // The square reaches 3 m beyond the goal's 5 m.
+        assert!(h.rows as f64 * h.scale[0] >= 16.0);
+    }
+
+    #[test]
+    fn bad_values_are_one_line_naming_the_field() {
+        let mut t = TerrainDistribution {
+            pegs: Some(PegField {
+                density: 1.5,
+                ..PegField::default()
+            }),
+            rough: None,
+        };
+        let e = t.validate().unwrap_err().to_string();
+        assert!(e.contains("terrain.pegs.density"), "{e}");
+        assert!(!e.contains('\n'));
+        t.pegs = Some(PegField {
+            spacing: 0.001,
+            width: 100.0,
+            ..PegField::default()
+        });
+        let e = t
+            .world(&WorldSpec::default(), &start(), (0.0, -50.0), 1)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("terrain.pegs") && e.contains("obstacles"), "{e}");
+    }
+}

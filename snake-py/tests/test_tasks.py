@@ -1,0 +1,108 @@
+"""The peg-field and rough-ground tasks (snakesim/SnakePegs-v0, snakesim/SnakeRough-v0): spaces and
+docstring defaults, one layout per seed, robots in the tasks, baselines on them, --env-from, bad input
+(docs/tasks.md)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import gymnasium
+import numpy as np
+import pytest
+import snakesim
+from snakesim import _core
+from snakesim.agents.loading import AgentError, load_agent
+from snakesim.cli import main as cli_main
+
+ROOT = Path(__file__).resolve().parents[2]
+TASKS = {"pegs": "snakesim/SnakePegs-v0", "rough": "snakesim/SnakeRough-v0"}
+
+
+def layout(env, seed: int) -> str:
+    """The episode's world as the core draws it (goal, start and terrain follow from the seed)."""
+    _, info = env.reset(seed=seed)
+    return json.dumps([info["goal"], info["start"], env.unwrapped._env.world_json()])
+
+
+@pytest.mark.parametrize("task", TASKS)
+def test_spaces_and_docstring_defaults(task):
+    env = gymnasium.make(TASKS[task], joints=10)
+    assert env.observation_space.shape == (2 + 2 * 10 + 8,)
+    assert env.action_space.shape == (3,)
+    defaults = json.loads(_core.env_keyword_defaults(task))
+    doc = " ".join(type(env.unwrapped).__doc__.split())
+    assert env.spec.max_episode_steps == defaults["max_episode_steps"] == 900
+    assert "900 env steps" in doc
+    d0, d1 = defaults["goal_distribution"]["distance"]
+    assert f"distance [{d0:g}, {d1:g}]" in doc
+    for key, value in defaults["terrain"][task].items():
+        assert f"``{key}`` {value:g}" in doc, key
+
+
+@pytest.mark.parametrize("task", TASKS)
+def test_a_seed_gives_one_layout_and_seeds_differ(task):
+    env = gymnasium.make(TASKS[task], joints=5)
+    first = layout(env, 3)
+    assert layout(env, 4) != first
+    assert layout(gymnasium.make(TASKS[task], joints=5), 3) == first
+
+
+def test_pegs_lie_between_start_and_goal():
+    env = snakesim.SnakePegsEnv(joints=5)
+    _, info = env.reset(seed=11)
+    world = json.loads(env._env.world_json())
+    assert len(world["obstacles"]) > 20
+    start, goal = np.array(info["start"][:2]), np.array(info["goal"])
+    for peg in world["obstacles"]:
+        p = np.array(peg["pose"][:2])
+        assert 0.9 < np.linalg.norm(p - start) < np.linalg.norm(goal - start)
+
+
+@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("name", ["steer", "gait"])
+def test_baselines_run_on_the_tasks_and_on_a_robot(task, name):
+    robot = ROOT / "robots" / "yaw-pitch-16.yaml"
+    for overrides in (None, {"robot": str(robot)}):
+        agent = load_agent(f"baseline:{name}", joints=10, task=task, env_overrides=overrides)
+        env = (
+            agent.make_env() if hasattr(agent, "make_env") else snakesim.envs.env.make_env(**agent.env_kwargs)
+        )
+        obs, _ = env.reset(seed=0)
+        for _ in range(5):
+            obs, *_ = env.step(agent.policy.act(obs)[0])
+        assert np.all(np.isfinite(obs))
+
+
+def test_baseline_on_exactly_a_models_env(tmp_path, capsys):
+    from snakesim.cli.evaluate import TASK_IDS
+
+    model = ROOT / "models" / "goal-10.safetensors"
+    agent = load_agent(str(model))
+    baseline = load_agent("baseline:steer", env_from=str(model))
+    assert baseline.env_kwargs == agent.env_kwargs
+    assert baseline.kind == "baseline" and baseline.joints == 10
+    with pytest.raises(AgentError, match="takes joints and preset"):
+        load_agent("baseline:steer", joints=5, env_from=str(model))
+    out = tmp_path / "e.json"
+    cli_main(["evaluate", "baseline:gait", "--env-from", str(model), "--episodes", "1", "--json", str(out)])
+    assert json.loads(out.read_text())["joints"] == 10
+
+    assert set(TASK_IDS) == {"goal", *TASKS}
+    with pytest.raises(AgentError, match="--env-from"):
+        load_agent("baseline:steer", env_from="baseline:gait")
+    with pytest.raises(AgentError, match="for baselines"):
+        load_agent(str(tmp_path), task="pegs")
+
+
+def test_bad_input_is_one_line(capsys):
+    with pytest.raises(ValueError, match=r"^terrain\.pegs\.density") as error:
+        snakesim.SnakePegsEnv(terrain={"pegs": {"density": 2}})
+    assert "\n" not in str(error.value)
+    with pytest.raises(ValueError, match=r"^terrain\.rough\.spacing") as error:
+        snakesim.SnakeRoughEnv(terrain={"rough": {"spacing": -1}})
+    with pytest.raises(ValueError, match="terrain"):
+        snakesim.SnakeGoalEnv(terrain={"hills": {}})
+    with pytest.raises(SystemExit):
+        cli_main(["evaluate", "baseline:steer", "--env", "mountains", "--episodes", "1"])
+    assert "unknown task 'mountains'" in capsys.readouterr().err
