@@ -42,9 +42,11 @@ pub struct EnvArgs {
     /// Parameter preset: paper or snakebot-gym, the paper's published env (default: paper).
     #[arg(long)]
     pub preset: Option<Preset>,
-    /// The task whose defaults the other keywords override: paper (snakesim/Snake-v0) or goal
-    /// (snakesim/SnakeGoal-v0) (default: paper).
-    #[arg(long, value_parser = ["paper", "goal"])]
+    /// The task whose defaults the other keywords override: paper (snakesim/Snake-v0), goal
+    /// (SnakeGoal-v0), pegs (SnakePegs-v0) or rough (SnakeRough-v0) (default: paper).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(
+        snake_core::env::Task::ALL.map(snake_core::env::Task::name)
+    ))]
     pub task: Option<String>,
     /// Env steps before an episode is truncated (default: the task's; 5000 for the paper's).
     #[arg(long, alias = "max-steps")]

@@ -270,7 +270,7 @@ pub enum Task {
 }
 
 impl Task {
-    /// Both tasks.
+    /// Every task.
     pub const ALL: [Task; 4] = [Task::Paper, Task::Goal, Task::Pegs, Task::Rough];
 
     /// The configuration name.
