@@ -57,6 +57,29 @@ plausible = {
         st.none(), st.fixed_dictionaries({"distance": st.tuples(st.floats(0, 5), st.floats(5, 20))})
     ),
     "robot": st.sampled_from([None, str(ROBOTS / "paper-cubes-5.yaml"), str(ROBOTS / "wheeled-8.urdf")]),
+    "terrain": st.sampled_from(
+        [
+            None,
+            {
+                "pegs": {
+                    "spacing": 0.4,
+                    "radius": 0.03,
+                    "height": 0.3,
+                    "jitter": 0.05,
+                    "density": 0.5,
+                    "width": 2.0,
+                }
+            },
+            {
+                "rough": {
+                    "amplitude": 0.05,
+                    "wavelength": 0.5,
+                    "hills_amplitude": 0.3,
+                    "hills_wavelength": 3.0,
+                }
+            },
+        ]
+    ),
     "world": st.sampled_from(
         [None, str(WORLDS / "slope-10.yaml"), str(WORLDS / "rough.yaml"), str(WORLDS / "pegs.yaml")]
     ),
