@@ -28,9 +28,9 @@ def build(client, joints):
     return create_snake(client, joints, [0, 0, HALF], [0, 0, 0, 1], link_mass=0.06)
 
 
-def one_run(joints, steps):
-    client = bullet_client.BulletClient(connection_mode=p.DIRECT)
-    uid = build(client, joints)
+def timed_gait(client, uid, joints, steps):
+    """Steps/s of snake.py's gait on the snake ``uid``: the control-and-step loop alone, then the
+    client is disconnected."""
     indices = list(range(joints))
     forces = [10.0] * joints
     front = 0.0
@@ -50,6 +50,11 @@ def one_run(joints, steps):
     elapsed = time.perf_counter() - start
     client.disconnect()
     return steps / elapsed
+
+
+def one_run(joints, steps):
+    client = bullet_client.BulletClient(connection_mode=p.DIRECT)
+    return timed_gait(client, build(client, joints), joints, steps)
 
 
 def main():

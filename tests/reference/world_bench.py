@@ -10,19 +10,16 @@ Prints one JSON object: {"flat": [steps/s ...], "world": [steps/s ...]}.
 """
 
 import json
-import math
 import os
 import sys
-import time
 
 import pybullet as p
 from pybullet_utils import bullet_client
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from paper_env_reference import HALF_EXTENT, create_snake  # noqa: E402
+from pybullet_bench import timed_gait  # noqa: E402
 from world_reference import build_world_from  # noqa: E402
-
-DT = 1.0 / 240.0
 
 
 def one_run(world, base_dir, joints, z, steps):
@@ -31,25 +28,7 @@ def one_run(world, base_dir, joints, z, steps):
     build_world_from(client, world, base_dir)
     client.setGravity(0, 0, -9.81)
     uid = create_snake(client, joints, [0, 0, z], [0, 0, 0, 1], link_mass=0.06)
-    indices = list(range(joints))
-    forces = [10.0] * joints
-    front = 0.0
-    start = time.perf_counter()
-    for _ in range(steps):
-        scale = front / 2.0 if front < 2.0 else 1.0
-        targets = []
-        for j in indices:
-            phase = (front - (j + 1) * 0.5) / 4.0
-            phase -= math.floor(phase)
-            targets.append(math.sin(phase * math.pi * 2.0) * scale * 0.4)
-        client.setJointMotorControlArray(
-            uid, indices, p.POSITION_CONTROL, targetPositions=targets, forces=forces
-        )
-        front += DT / 1.5 * 4.0
-        client.stepSimulation()
-    elapsed = time.perf_counter() - start
-    client.disconnect()
-    return steps / elapsed
+    return timed_gait(client, uid, joints, steps)
 
 
 def main(argv):
