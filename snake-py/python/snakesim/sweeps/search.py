@@ -127,22 +127,6 @@ def _plain(value: Any) -> Any:
     return value.item() if hasattr(value, "item") else value
 
 
-def command(args: Any) -> int:
-    """``snakesim search`` from its parsed arguments (see snakesim.cli)."""
-    return search(
-        args.config,
-        space=args.space,
-        out=args.out,
-        trials=args.trials,
-        metric=args.metric,
-        sets=args.set,
-        address=args.address,
-        cpus_per_trial=args.cpus_per_trial or sweep.DEFAULT_CPUS_PER_TRIAL,
-        max_failures=sweep.DEFAULT_MAX_FAILURES if args.max_failures is None else args.max_failures,
-        progress=args.progress,
-    )
-
-
 def search(
     config: str | os.PathLike,
     *,
