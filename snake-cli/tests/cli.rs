@@ -1,16 +1,12 @@
 //! End-to-end tests of the `snake-cli` binary.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use snakesim_tests::{assert_identical, read_csv, run_reference, Scenario};
 
-fn snake_cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_snake-cli"))
-        .args(args)
-        .output()
-        .expect("snake-cli starts")
-}
+mod common;
+use common::snake_cli;
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("snake-cli-test-{}", std::process::id()));

@@ -2,14 +2,9 @@
 //! says, and bad gait input is one line, a non-zero exit and no file.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
-fn snake_cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_snake-cli"))
-        .args(args)
-        .output()
-        .expect("snake-cli starts")
-}
+mod common;
+use common::snake_cli;
 
 fn robot(name: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -21,7 +16,7 @@ fn robot(name: &str) -> String {
 
 /// Runs a gait and returns the centre of mass's displacement (dx, dy) from the summary.
 fn displacement(robot_file: &str, gait: &str, seconds: &str) -> (f64, f64) {
-    let out = snake_cli(&[
+    let (_, dx, dy) = common::com_moved(&[
         "run",
         "--robot",
         robot_file,
@@ -30,22 +25,7 @@ fn displacement(robot_file: &str, gait: &str, seconds: &str) -> (f64, f64) {
         "--seconds",
         seconds,
     ]);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{gait}: {text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("centre of mass moved"))
-        .unwrap_or_else(|| panic!("no centre-of-mass line in {text}"));
-    let inside = &line[line.find('(').unwrap() + 1..line.find(')').unwrap()];
-    let v: Vec<f64> = inside
-        .split(',')
-        .map(|x| x.trim().parse().unwrap())
-        .collect();
-    (v[0], v[1])
+    (dx, dy)
 }
 
 // yaw-pitch-16 lies along +y from its head at the origin: along the body is y (head first is -y),
@@ -97,7 +77,7 @@ fn linear_and_roll_move_the_yaw_pitch_robot_as_named() {
 #[test]
 fn turn_spins_the_yaw_pitch_robot_in_place() {
     let csv = std::env::temp_dir().join(format!("snake-cli-turn-{}.csv", std::process::id()));
-    let out = snake_cli(&[
+    let (moved, _, _) = common::com_moved(&[
         "run",
         "--robot",
         &robot("yaw-pitch-16.yaml"),
@@ -108,11 +88,6 @@ fn turn_spins_the_yaw_pitch_robot_in_place() {
         "--output",
         csv.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let text = std::fs::read_to_string(&csv).unwrap();
     let _ = std::fs::remove_file(&csv);
     let mut lines = text.lines();
@@ -142,13 +117,6 @@ fn turn_spins_the_yaw_pitch_robot_in_place() {
         "turn rotated the robot by only {:.0} degrees in 10 s",
         turned.to_degrees()
     );
-    let text = String::from_utf8_lossy(&out.stdout);
-    let moved: f64 = text
-        .lines()
-        .find_map(|l| l.strip_prefix("centre of mass moved "))
-        .and_then(|l| l.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .expect("a centre-of-mass line");
     assert!(moved < 1.0, "turn moved the centre of mass {moved:.2} m");
 }
 

@@ -2,23 +2,16 @@
 //! built-in snake, targets files, and one-line errors for bad robots.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde::Serialize;
 use snake_core::{Gait, InertiaSource, RobotGait, RobotSpec};
 use snakesim_tests::{assert_identical, read_csv, repo_root, run_reference_script};
 
-fn snake_cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_snake-cli"))
-        .args(args)
-        .output()
-        .expect("snake-cli starts")
-}
+mod common;
+use common::snake_cli;
 
 fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("snake-cli-robots-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("robots", tag)
 }
 
 fn robot(name: &str) -> PathBuf {

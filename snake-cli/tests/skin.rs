@@ -3,21 +3,14 @@
 //! or by `--skin-friction`/`--skin-axis`; and one-line errors, writing nothing, for bad skin input.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use snakesim_tests::read_csv;
 
-fn snake_cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_snake-cli"))
-        .args(args)
-        .output()
-        .expect("snake-cli starts")
-}
+mod common;
+use common::snake_cli;
 
 fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("snake-cli-skin-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("skin", tag)
 }
 
 /// A 0.2 kg block of 0.2 x 0.06 x 0.04 m whose collision box is rolled and pitched in its link frame,
@@ -299,22 +292,6 @@ fn bad_skin_input_is_one_line_and_writes_nothing() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Centre-of-mass displacement (m) that `snake-cli run` reports.
-fn com_moved(args: &[&str]) -> f64 {
-    let out = snake_cli(args);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    text.lines()
-        .find_map(|l| l.strip_prefix("centre of mass moved "))
-        .and_then(|l| l.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("no centre-of-mass line in {text}"))
-}
-
 /// Hu et al.'s second finding, weight redistribution: lifting the parts of the body that would push
 /// backwards raises the speed. yaw-pitch-16 on a skin of forward < backward < transverse (ground
 /// friction 1), its lateral wave with and without the vertical wave that lifts it at the curvature
@@ -325,7 +302,7 @@ fn lifting_the_body_raises_the_speed() {
     let robot = root.join("robots/yaw-pitch-16.yaml");
     let world = root.join("worlds/plane-mu1.yaml");
     let run = |pitch: &str, skin: &str| {
-        com_moved(&[
+        common::com_moved(&[
             "run",
             "--robot",
             robot.to_str().unwrap(),
@@ -342,6 +319,7 @@ fn lifting_the_body_raises_the_speed() {
             "--seconds",
             "12",
         ])
+        .0
     };
     let (lifted, flat) = (run("0.15", "0.1,0.15,0.2"), run("0", "0.1,0.15,0.2"));
     assert!(
