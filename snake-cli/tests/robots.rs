@@ -263,6 +263,13 @@ fn bad_robots_are_one_line_and_write_nothing() {
             ball("b")
         )),
     );
+    let yaw_pitch = robot("yaw-pitch-16.urdf");
+    let wave = |name: &str, wave: &str| {
+        write(
+            name,
+            &format!("urdf: {}\nwave: {wave}\n", yaw_pitch.display()),
+        )
+    };
     let cases: Vec<(Vec<String>, String)> = vec![
         (vec![write("notxml.urdf", "<robot name='r'><link")], "notxml.urdf: not XML".into()),
         (
@@ -322,6 +329,33 @@ fn bad_robots_are_one_line_and_write_nothing() {
         (
             vec![write("link.yaml", "urdf: good.urdf\nlinks:\n  nose: {anisotropic_friction: [1, 1, 1]}\n")],
             "links: nose: no such link".into(),
+        ),
+        (
+            vec![wave("wave-name.yaml", "{gait: wiggle}")],
+            "wave-name.yaml: wave: unknown gait 'wiggle'".into(),
+        ),
+        (
+            vec![wave("wave-sine.yaml", "{gait: sine}")],
+            "wave-sine.yaml: wave: gait sine is the envs' wave already".into(),
+        ),
+        (
+            vec![wave("wave-param.yaml", "{gait: lateral, params: {period: 0}}")],
+            "wave-param.yaml: wave: gait parameter period".into(),
+        ),
+        (
+            vec![wave("wave-steer.yaml", "{gait: lateral, steering: 2}")],
+            "wave-steer.yaml: wave: steering must be in (0, ".into(),
+        ),
+        (
+            vec![wave("wave-key.yaml", "{gait: lateral, speed: 1}")],
+            "wave-key.yaml: wave: unknown field `speed`".into(),
+        ),
+        (
+            vec![write(
+                "wave-joints.yaml",
+                "urdf: good.urdf\nwave: {gait: sidewind}\n",
+            )],
+            "wave-joints.yaml: wave: gait sidewind needs".into(),
         ),
         (
             vec![

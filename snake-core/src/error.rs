@@ -37,6 +37,17 @@ pub(crate) fn check(code: i32) -> Result<()> {
     Err(Error::Engine { code, message })
 }
 
+impl Error {
+    /// The message without the "invalid argument: " of its kind, for an error wrapped in context
+    /// (`file: key: message`).
+    pub fn message(&self) -> String {
+        match self {
+            Error::InvalidArgument(m) => m.clone(),
+            other => other.to_string(),
+        }
+    }
+}
+
 /// An `InvalidArgument` error from anything printable, as one line (see [`one_line`]).
 pub(crate) fn invalid(message: impl Into<String>) -> Error {
     Error::InvalidArgument(one_line(message.into()))

@@ -60,7 +60,10 @@ pub use gait::{
     SerpenoidParams,
 };
 pub use math::{quaternion_from_euler, StartPose};
-pub use robot::{Robot, RobotFile, RobotGait, RobotRef, RobotSpec, ShapeDrawing, Simulation};
+pub use robot::{
+    Robot, RobotFile, RobotGait, RobotRef, RobotSpec, RobotWave, ShapeDrawing, Simulation,
+    WaveFile, DEFAULT_WAVE_STEERING,
+};
 pub use skin::{SkinAxis, SkinFriction};
 pub use snake::Snake;
 pub use urdf::{InertiaSource, UrdfRobot};

@@ -25,7 +25,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Error, Result};
-use crate::gait::{Gait, LateralUndulation};
+use crate::gait::{Gait, GaitKind, JointRoles, LateralUndulation, Serpenoid};
 use crate::limits::MAX_URDF_BYTES;
 use crate::math::StartPose;
 use crate::skin::{SkinAxis, SkinFriction};
@@ -86,6 +86,7 @@ pub struct LinkSettings {
 ///   head: {anisotropic_friction: [1, 1, 1]}
 ///   tail: {skin_friction: {forward: 0.1, backward: 0.1, transverse: 0.1}}
 /// gait: {segment_length: 0.0635, wave_length: 0.5, amplitude: 0.6}   # the sine gait's wave
+/// wave: {gait: lateral, steering: 0.1}   # the envs' steered wave (default: the sine)
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -114,6 +115,76 @@ pub struct RobotFile {
     /// Parameters of the sine gait (`--gait sine`) for this robot; left out, pybullet's snake.py wave.
     #[serde(default)]
     pub gait: Option<LateralUndulation>,
+    /// The wave the envs' `gait` and `residual` actions drive: a gait of the library with parameters
+    /// over its defaults; left out, the sine gait above (see [`crate::gait::SteeredWave`]).
+    #[serde(default)]
+    pub wave: Option<WaveFile>,
+}
+
+/// The largest yaw offset, radians, that the envs' steering sets on a robot file's `wave` unless the
+/// file says otherwise: measured on yaw-pitch-16's lateral wave, 0.1 rad turns it at about 15
+/// degrees/s as it crawls, while 0.5 rad spins it in place (see [`crate::gait::steered`]).
+pub const DEFAULT_WAVE_STEERING: f64 = 0.1;
+
+/// A robot file's `wave`: a gait of the library (`lateral`, `sidewind`, `roll`, `linear`, `turn`),
+/// `--gait-param` style parameters over that gait's defaults for this robot, and how far the envs'
+/// steering bends it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaveFile {
+    /// The gait's name.
+    pub gait: String,
+    /// Parameters by key ([`crate::gait::serpenoid::PARAM_KEYS`]).
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+    /// The yaw offset, radians, of a full steering action ([`DEFAULT_WAVE_STEERING`]).
+    #[serde(default = "default_wave_steering")]
+    pub steering: f64,
+}
+
+fn default_wave_steering() -> f64 {
+    DEFAULT_WAVE_STEERING
+}
+
+/// A robot's library wave for the envs: the gait and the yaw offset of a full steering action.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotWave {
+    /// The gait, unsteered.
+    pub gait: Serpenoid,
+    /// Yaw offset of a full steering action, radians (> 0).
+    pub steering: f64,
+}
+
+impl WaveFile {
+    /// The wave on a robot of `urdf`, checked: a library gait the robot has the joints for, with
+    /// parameters inside their limits, and a steering offset inside the gait's offset limits.
+    fn wave(&self, urdf: &UrdfRobot) -> Result<RobotWave> {
+        let high = crate::limits::GAIT_OFFSET.1;
+        if !(self.steering.is_finite() && self.steering > 0.0 && self.steering <= high) {
+            return Err(invalid(format!(
+                "steering must be in (0, {high}] radians, got {}",
+                self.steering
+            )));
+        }
+        Ok(RobotWave {
+            gait: self.gait(urdf)?,
+            steering: self.steering,
+        })
+    }
+
+    fn gait(&self, urdf: &UrdfRobot) -> Result<Serpenoid> {
+        let kind: GaitKind = self.gait.parse()?;
+        if kind == GaitKind::Sine {
+            return Err(invalid(
+                "gait sine is the envs' wave already (set its parameters under the robot file's \
+                 `gait`); name a gait of the library here",
+            ));
+        }
+        let params: Vec<(String, f64)> = self.params.iter().map(|(k, v)| (k.clone(), *v)).collect();
+        // The env sets its own time step on the wave; this one only passes the check.
+        let dt = SnakeConfig::default().dt;
+        Serpenoid::new(kind, &JointRoles::of_urdf(urdf), &params, 0.0, dt)
+    }
 }
 
 /// Everything needed to build a [`Robot`].
@@ -135,6 +206,8 @@ pub struct RobotSpec {
     pub source: PathBuf,
     /// The sine gait's parameters for this robot (snake.py's when `None`).
     pub gait: Option<LateralUndulation>,
+    /// The library gait the envs' actions steer instead of the sine wave (the robot file's `wave`).
+    pub wave: Option<RobotWave>,
 }
 
 fn check_friction(file: &str, key: &str, a: [f64; 3]) -> Result<()> {
@@ -182,6 +255,7 @@ impl RobotSpec {
             start: None,
             source: path.to_path_buf(),
             gait: None,
+            wave: None,
         })
     }
 
@@ -241,14 +315,20 @@ impl RobotSpec {
         }
         if let Some(g) = &file.gait {
             g.validate()
-                .map_err(|e| invalid(format!("{shown}: gait: {e}")))?;
+                .map_err(|e| invalid(format!("{shown}: gait: {}", e.message())))?;
         }
+        let wave = file
+            .wave
+            .as_ref()
+            .map(|w| w.wave(&urdf))
+            .transpose()
+            .map_err(|e| invalid(format!("{shown}: wave: {}", e.message())))?;
         let start = file
             .start
             .map(|[x, y, z, yaw]| {
                 let s = StartPose { x, y, z, yaw };
                 s.validate()
-                    .map_err(|e| invalid(format!("{shown}: start: {e}")))?;
+                    .map_err(|e| invalid(format!("{shown}: start: {}", e.message())))?;
                 Ok::<_, Error>(s)
             })
             .transpose()?;
@@ -261,6 +341,7 @@ impl RobotSpec {
             start,
             source: path.to_path_buf(),
             gait: file.gait,
+            wave,
         })
     }
 

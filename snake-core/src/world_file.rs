@@ -700,7 +700,7 @@ impl WorldSpec {
 impl WorldFile {
     /// Checks every value and reads or generates the ground; `shown` prefixes every error.
     pub fn resolve(&self, shown: &str, dir: &Path) -> Result<WorldSpec> {
-        let e = |err: crate::Error| invalid(format!("{shown}: {}", err_text(&err)));
+        let e = |err: crate::Error| invalid(format!("{shown}: {}", err.message()));
         let ground = match &self.ground {
             GroundFile::Plane {} => Ground::Plane,
             GroundFile::Slope { degrees } => {
@@ -737,7 +737,7 @@ impl WorldFile {
                     parse_heightfield_csv(&text, &csv_shown).map_err(|err| {
                         invalid(format!(
                             "{shown}: ground: heightfield: file: {}",
-                            err_text(&err)
+                            err.message()
                         ))
                     })?;
                 Ground::Heightfield(Heightfield {
@@ -835,13 +835,6 @@ fn shortened(message: &str) -> String {
     let head: String = chars[..200].iter().collect();
     let tail: String = chars[chars.len() - 80..].iter().collect();
     format!("{head} [...] {tail}")
-}
-
-fn err_text(err: &crate::Error) -> String {
-    match err {
-        crate::Error::InvalidArgument(m) => m.clone(),
-        other => other.to_string(),
-    }
 }
 
 impl Obstacle {

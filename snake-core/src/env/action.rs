@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
-use crate::gait::{Gait, LateralUndulation};
+use crate::gait::{Gait, LateralUndulation, SteeredWave};
 
 /// Largest wave amplitude the gait modes accept, radians: beyond about 90 degrees neighbouring cubes
 /// (0.5 m, 0.01 m apart) collide.
@@ -26,7 +26,12 @@ pub enum ActionMode {
     Joints,
     /// Three values, each mapped linearly from [-1, 1] onto its range: the lateral-undulation wave's
     /// steering, amplitude and frequency. The wave's phase runs on across steps, and the targets follow
-    /// the wave at every physics step.
+    /// the wave at every physics step. On a robot whose robot file names a `wave` (a gait of the
+    /// library), all three are relative, so that action 0 is the gait as named: the amplitude and
+    /// frequency over the middle of their ranges multiply the gait's yaw amplitude and its frequency,
+    /// and the steering over the largest |steering| of its range, times the wave's `steering`
+    /// (radians), is subtracted from its yaw offset, which turns the robot the way a steering of the
+    /// sine wave does (positive: clockwise seen from above; [`SteeredWave`]).
     Gait,
     /// One value per joint: the default wave's target (amplitude 0.4 rad, period 1.5 s, as pybullet's
     /// snake.py) plus `clip(a, -1, 1) * residual_scale` radians.
@@ -128,12 +133,50 @@ fn lerp([low, high]: [f64; 2], a: f64) -> f64 {
     low + (high - low) * (a + 1.0) * 0.5
 }
 
+/// `value / middle of range`, the factor a relative action sets (0 for a range of [0, 0]).
+fn relative([low, high]: [f64; 2], value: f64) -> f64 {
+    let middle = 0.5 * (low + high);
+    if middle > 0.0 {
+        value / middle
+    } else {
+        0.0
+    }
+}
+
+/// `value / largest |bound|`, in [-1, 1] (0 for a range of [0, 0]).
+fn relative_to_bound([low, high]: [f64; 2], value: f64) -> f64 {
+    let bound = low.abs().max(high.abs());
+    if bound > 0.0 {
+        value / bound
+    } else {
+        0.0
+    }
+}
+
+/// The wave the gait and residual modes drive.
+#[derive(Debug, Clone)]
+enum Wave {
+    /// pybullet's snake.py wave (the cube snake's, or a robot file's `gait`).
+    Sine(LateralUndulation),
+    /// A gait of the library, named by a robot file's `wave`, with the yaw offset of a full steering.
+    Library(SteeredWave, f64),
+}
+
+impl Wave {
+    fn as_gait(&mut self) -> &mut dyn Gait {
+        match self {
+            Wave::Sine(w) => w,
+            Wave::Library(w, _) => w,
+        }
+    }
+}
+
 /// Turns each env step's action into joint targets for every physics step.
 #[derive(Debug, Clone)]
 pub(crate) struct Driver {
     config: ActionConfig,
     action_scale: f64,
-    wave: LateralUndulation,
+    wave: Wave,
     /// The clipped action of the current env step.
     action: Vec<f64>,
 }
@@ -141,14 +184,24 @@ pub(crate) struct Driver {
 impl Driver {
     pub fn new(config: &super::EnvConfig) -> Self {
         let (dt, half_extent) = (config.snake.dt, config.snake.half_extent);
-        // A robot's own wave (its robot file's `gait`), else snake.py's along cubes of the snake's size.
-        let robot_wave = config.robot.as_ref().and_then(|r| r.spec().gait.clone());
-        let has_robot_wave = robot_wave.is_some();
-        let mut wave = robot_wave.unwrap_or_default();
-        wave.dt = dt;
-        if !has_robot_wave {
-            wave.segment_length = half_extent * 2.0;
-        }
+        let spec = config.robot.as_ref().map(|r| r.spec());
+        let wave = if let Some(robot_wave) = spec.and_then(|s| s.wave.clone()) {
+            // A robot file's library gait.
+            let mut wave = SteeredWave::new(robot_wave.gait);
+            wave.set_dt(dt);
+            Wave::Library(wave, robot_wave.steering)
+        } else {
+            // A robot's own sine wave (its robot file's `gait`), else snake.py's along cubes of the
+            // snake's size.
+            let robot_wave = spec.and_then(|s| s.gait.clone());
+            let has_robot_wave = robot_wave.is_some();
+            let mut wave = robot_wave.unwrap_or_default();
+            wave.dt = dt;
+            if !has_robot_wave {
+                wave.segment_length = half_extent * 2.0;
+            }
+            Wave::Sine(wave)
+        };
         Driver {
             config: config.action,
             action_scale: config.action_scale,
@@ -160,7 +213,7 @@ impl Driver {
 
     /// Back to the wave's start (an episode's first step ramps the wave in again).
     pub fn reset(&mut self) {
-        self.wave.reset();
+        self.wave.as_gait().reset();
         self.action.clear();
     }
 
@@ -170,9 +223,22 @@ impl Driver {
         self.action.extend(action.map(|a| a.clamp(-1.0, 1.0)));
         if self.config.mode == ActionMode::Gait {
             let c = &self.config;
-            self.wave.steering = lerp(c.steering, self.action[0]);
-            self.wave.amplitude = lerp(c.amplitude, self.action[1]);
-            self.wave.period = 1.0 / lerp(c.frequency, self.action[2]);
+            let steering = lerp(c.steering, self.action[0]);
+            let amplitude = lerp(c.amplitude, self.action[1]);
+            let frequency = lerp(c.frequency, self.action[2]);
+            match &mut self.wave {
+                Wave::Sine(w) => {
+                    w.steering = steering;
+                    w.amplitude = amplitude;
+                    w.period = 1.0 / frequency;
+                }
+                Wave::Library(w, full_steering) => {
+                    // Minus: a positive yaw offset turns a crawling robot counter-clockwise.
+                    w.steering = -relative_to_bound(c.steering, steering) * *full_steering;
+                    w.amplitude_factor = relative(c.amplitude, amplitude);
+                    w.frequency_factor = relative(c.frequency, frequency);
+                }
+            }
         }
     }
 
@@ -195,9 +261,9 @@ impl Driver {
                     *t = a * self.action_scale;
                 }
             }
-            ActionMode::Gait => self.wave.next_targets(targets),
+            ActionMode::Gait => self.wave.as_gait().next_targets(targets),
             ActionMode::Residual => {
-                self.wave.next_targets(targets);
+                self.wave.as_gait().next_targets(targets);
                 for (t, a) in targets.iter_mut().zip(&self.action) {
                     *t += a * self.config.residual_scale;
                 }
@@ -207,8 +273,13 @@ impl Driver {
 
     /// The wave's phase at the head, radians in [0, 2 pi).
     pub fn wave_phase(&self) -> f64 {
-        let turns = self.wave.wave_front() / self.wave.wave_length;
-        (turns - turns.floor()) * std::f64::consts::TAU
+        match &self.wave {
+            Wave::Sine(w) => {
+                let turns = w.wave_front() / w.wave_length;
+                (turns - turns.floor()) * std::f64::consts::TAU
+            }
+            Wave::Library(w, _) => w.phase(),
+        }
     }
 }
 
@@ -225,13 +296,17 @@ mod tests {
             },
             ..Default::default()
         });
+        let sine = |d: &Driver| match &d.wave {
+            Wave::Sine(w) => w.clone(),
+            Wave::Library(..) => panic!("the cube snake's wave is the sine"),
+        };
         d.set_action([-1.0, 1.0, 0.0].into_iter());
-        assert_eq!(d.wave.steering, -0.5);
-        assert_eq!(d.wave.amplitude, 0.6);
-        assert_eq!(d.wave.period, 1.0 / 0.7);
+        assert_eq!(sine(&d).steering, -0.5);
+        assert_eq!(sine(&d).amplitude, 0.6);
+        assert_eq!(sine(&d).period, 1.0 / 0.7);
         d.set_action([5.0, -5.0, 1.0].into_iter());
         assert_eq!(d.action(), &[1.0, -1.0, 1.0]);
-        assert_eq!((d.wave.steering, d.wave.amplitude), (0.5, 0.2));
+        assert_eq!((sine(&d).steering, sine(&d).amplitude), (0.5, 0.2));
     }
 
     #[test]
@@ -254,6 +329,61 @@ mod tests {
             assert_eq!(t, expected);
         }
         assert!(d.wave_phase() >= 0.0 && d.wave_phase() < std::f64::consts::TAU);
+    }
+
+    #[test]
+    fn a_robot_files_wave_is_steered_relative_to_the_gait() {
+        use crate::gait::Serpenoid;
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/yaw-pitch-16.yaml");
+        let robot = crate::RobotRef::load(&path).unwrap();
+        let wave = robot
+            .spec()
+            .wave
+            .clone()
+            .expect("yaw-pitch-16 names a wave");
+        let config = super::super::EnvConfig {
+            robot: Some(robot),
+            ..super::super::EnvConfig::goal_task(crate::Preset::Paper, 5)
+        };
+        let joints = config.joints();
+        let targets = |action: [f64; 3], steps: usize| {
+            let mut d = Driver::new(&config);
+            let mut t = vec![0.0; joints];
+            for _ in 0..steps {
+                d.set_action(action.into_iter());
+                d.next_targets(&mut t);
+            }
+            t
+        };
+        // Action 0 is the gait as the robot file names it.
+        let mut expected = vec![0.0; joints];
+        let steps = 1000;
+        wave.gait
+            .targets_at((steps - 1) as f64 * config.snake.dt, &mut expected);
+        for (a, b) in targets([0.0; 3], steps).iter().zip(&expected) {
+            assert!((a - b).abs() < 1e-9, "{a} against {b}");
+        }
+        // A full steering subtracts the wave's steering from every yaw joint (the ramp is over).
+        let gait: &Serpenoid = &wave.gait;
+        let steered = targets([1.0, 0.0, 0.0], steps);
+        for ((s, e), role) in steered.iter().zip(&expected).zip(&gait.roles) {
+            let shift = if *role == crate::gait::JointRole::Yaw {
+                -wave.steering
+            } else {
+                0.0
+            };
+            assert!((s - e - shift).abs() < 1e-9, "{s} against {e} + {shift}");
+        }
+        // Amplitude and frequency at the top of their ranges: 0.6 / 0.4 and 1.0 / 0.7 of the gait's.
+        let mut fast = Serpenoid::clone(gait);
+        fast.params.amplitude_yaw *= 0.6 / 0.4;
+        fast.params.period /= 1.0 / 0.7;
+        let mut expected_fast = vec![0.0; joints];
+        fast.targets_at((steps - 1) as f64 * config.snake.dt, &mut expected_fast);
+        for (a, b) in targets([0.0, 1.0, 1.0], steps).iter().zip(&expected_fast) {
+            assert!((a - b).abs() < 1e-9, "{a} against {b}");
+        }
     }
 
     #[test]

@@ -584,3 +584,71 @@ fn physics_trace_records_every_physics_step_and_changes_nothing() {
         assert!(traced.physics_trace().is_none());
     }
 }
+
+/// yaw-pitch-16's robot-file wave (the lifted lateral wave) in the goal task: steering 0 crawls
+/// straight ahead, +1 turns the robot clockwise and -1 counter-clockwise, the envs' convention for the
+/// sine wave too (the driver flips the sign of the yaw offset; see `gait::steered`). Directions of
+/// travel are taken over whole 2 s gait cycles, from the end of the second cycle to the eighth.
+#[test]
+fn robot_wave_steers_the_envs_way() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/yaw-pitch-16.yaml");
+    let config = EnvConfig {
+        robot: Some(crate::RobotRef::load(&path).unwrap()),
+        max_episode_steps: 10_000,
+        goal: (500.0, 0.0),
+        goal_distribution: None,
+        ..EnvConfig::goal_task(Preset::Paper, 5)
+    };
+    let start = StartPose {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0254,
+        yaw: 0.0,
+    };
+    let turn_and_speed = |steering: f64| {
+        let mut e = env(config.clone());
+        let options = ResetOptions {
+            start: Some(start),
+            ..ResetOptions::default()
+        };
+        let (mut obs, _) = e.reset(None, options).unwrap();
+        let mut at_cycle = vec![(obs[0] as f64, obs[1] as f64)];
+        // 60 env steps of 8 physics steps of 1/240 s: one 2 s cycle.
+        for k in 0..8 * 60 {
+            obs = e.step(&[steering, 0.0, 0.0]).unwrap().obs;
+            if k % 60 == 59 {
+                at_cycle.push((obs[0] as f64, obs[1] as f64));
+            }
+        }
+        let direction = |c: usize| {
+            let ((x0, y0), (x1, y1)) = (at_cycle[c], at_cycle[c + 1]);
+            (y1 - y0).atan2(x1 - x0)
+        };
+        let mut turned = 0.0;
+        for c in 1..7 {
+            let d = direction(c + 1) - direction(c);
+            turned +=
+                (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        }
+        let ((x0, y0), (x1, y1)) = (at_cycle[1], at_cycle[7]);
+        (
+            turned.to_degrees(),
+            ((x1 - x0).hypot(y1 - y0)) / 12.0,
+            direction(1).to_degrees(),
+        )
+    };
+    let (straight, speed, heading) = turn_and_speed(0.0);
+    assert!(
+        straight.abs() < 15.0,
+        "unsteered it turned {straight} degrees"
+    );
+    assert!(speed > 0.12, "unsteered it crawled {speed} m/s");
+    assert!(
+        (heading + 90.0).abs() < 20.0,
+        "head first is -y; it went {heading} degrees"
+    );
+    let (right, _, _) = turn_and_speed(1.0);
+    let (left, _, _) = turn_and_speed(-1.0);
+    assert!(right < -120.0, "steering +1 turned {right} degrees");
+    assert!(left > 120.0, "steering -1 turned {left} degrees");
+}

@@ -5,6 +5,8 @@
 //! - [`serpenoid`]: the gait library, Tesch et al.'s compound serpenoid over a robot's yaw and pitch
 //!   joints (`lateral`, `sidewind`, `roll`, `linear`, `turn`).
 //! - [`joints`]: which joints are yaw and which pitch, from the joint axes at rest.
+//! - [`steered`]: [`SteeredWave`], a library gait steered as it runs (the envs' wave on a robot whose
+//!   robot file names one).
 //!
 //! [`GaitChoice::new`] makes any of them by name with `KEY=VALUE` parameters, as `snake-cli run --gait
 //! NAME --gait-param KEY=VALUE` does.
@@ -12,10 +14,12 @@
 pub mod joints;
 pub mod serpenoid;
 pub mod sine;
+pub mod steered;
 
 pub use joints::{JointRole, JointRoles};
 pub use serpenoid::{Serpenoid, SerpenoidParams};
 pub use sine::LateralUndulation;
+pub use steered::SteeredWave;
 
 use crate::error::{invalid, Result};
 

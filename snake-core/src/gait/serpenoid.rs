@@ -305,21 +305,40 @@ impl Serpenoid {
     pub fn targets_at(&self, t: f64, targets: &mut [f64]) {
         let p = &self.params;
         let w = 2.0 * PI / p.period;
-        let r = if p.ramp > 0.0 {
-            (t / p.ramp).min(1.0)
+        self.shape(p, w * t, p.pitch_rate * w * t, self.ramp_at(t), targets);
+    }
+
+    /// The ramp `r(t)` at `t` seconds.
+    pub(crate) fn ramp_at(&self, t: f64) -> f64 {
+        let ramp = self.params.ramp;
+        if ramp > 0.0 {
+            (t / ramp).min(1.0)
         } else {
             1.0
-        };
+        }
+    }
+
+    /// The equation with parameters `p` at the yaw wave's temporal phase `yaw_phase` (`w t`), the pitch
+    /// wave's `pitch_phase` (`pitch_rate w t`) and ramp `r`, into `targets` (one per movable joint).
+    /// The phases are arguments so that a wave whose frequency changes as it runs
+    /// ([`super::SteeredWave`]) can accumulate them.
+    pub(crate) fn shape(
+        &self,
+        p: &SerpenoidParams,
+        yaw_phase: f64,
+        pitch_phase: f64,
+        r: f64,
+        targets: &mut [f64],
+    ) {
         for ((target, role), module) in targets.iter_mut().zip(&self.roles).zip(&self.modules) {
             let n = module.unwrap_or(0) as f64;
             *target = match role {
                 JointRole::Yaw => {
-                    r * (p.offset_yaw + p.amplitude_yaw * (w * t - p.spatial_yaw * n).sin())
+                    r * (p.offset_yaw + p.amplitude_yaw * (yaw_phase - p.spatial_yaw * n).sin())
                 }
                 JointRole::Pitch => {
                     r * (p.offset_pitch
-                        + p.amplitude_pitch
-                            * (p.pitch_rate * w * t - p.spatial_pitch * n + p.phase).sin())
+                        + p.amplitude_pitch * (pitch_phase - p.spatial_pitch * n + p.phase).sin())
                 }
                 JointRole::Other | JointRole::Passive => 0.0,
             };
