@@ -75,7 +75,7 @@ def test_baselines_run_on_the_tasks_and_on_a_robot(task, name):
 
 
 def test_baseline_on_exactly_a_models_env(tmp_path, capsys):
-    from snakesim.cli.evaluate import TASK_IDS
+    from snakesim.cli.args import TASK_IDS
 
     model = ROOT / "models" / "goal-10.safetensors"
     agent = load_agent(str(model))

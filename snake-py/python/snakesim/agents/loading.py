@@ -63,7 +63,24 @@ class Agent:
 
     @property
     def joints(self) -> int:
+        """The driven joints: the snake's, or a robot's movable joints (whatever ``joints`` says)."""
+        if self.env_kwargs.get("robot"):
+            from snakesim import _core
+            from snakesim.envs.config import env_config
+
+            return int(_core.Env(env_config(**self.env_kwargs)).joints)
         return int(self.env_kwargs["joints"])
+
+    @property
+    def label(self) -> str:
+        """What acts, in words: ``PPO-small`` or ``baseline:steer``."""
+        return self.path if self.kind == "baseline" else f"PPO-{self.arch}"
+
+    @property
+    def body(self) -> str:
+        """The body it drives, in words: ``10 joints`` or ``robot robots/yaw-pitch-16.yaml (15 joints)``."""
+        robot = self.env_kwargs.get("robot")
+        return f"{self.joints} joints" if not robot else f"robot {robot} ({self.joints} joints)"
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
         if self.kind == "baseline":

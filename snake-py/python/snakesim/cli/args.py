@@ -78,6 +78,41 @@ def agent_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--torch-threads", type=threads, default=1, help="torch CPU threads (default 1)")
 
 
+#: Gymnasium ids of the tasks a baseline runs in, by task name.
+TASK_IDS = {
+    "goal": "snakesim/SnakeGoal-v0",
+    "pegs": "snakesim/SnakePegs-v0",
+    "rough": "snakesim/SnakeRough-v0",
+}
+
+
+def task_name(text: str) -> str:
+    """``--env``: a task name or its Gymnasium id, as the task name."""
+    for name, env_id in TASK_IDS.items():
+        if text in (name, env_id):
+            return name
+    raise argparse.ArgumentTypeError(
+        f"unknown task {text!r} (expected one of: {', '.join(TASK_IDS)}, or {', '.join(TASK_IDS.values())})"
+    )
+
+
+def baseline_env_options(p: argparse.ArgumentParser) -> None:
+    """The env a baseline runs in: a task, a robot, or exactly a model's env."""
+    p.add_argument(
+        "--env",
+        type=task_name,
+        metavar="TASK",
+        help="for a baseline: the task, goal (default), pegs or rough, or its Gymnasium id "
+        "(snakesim/SnakePegs-v0)",
+    )
+    p.add_argument("--robot", metavar="FILE", help="for a baseline: a robot file instead of the cube snake")
+    p.add_argument(
+        "--env-from",
+        metavar="MODEL",
+        help="for a baseline: exactly the env recorded in MODEL (a native model or a run directory)",
+    )
+
+
 def load_agent(args: argparse.Namespace):
     from snakesim import extras
     from snakesim.agents.loading import load_agent

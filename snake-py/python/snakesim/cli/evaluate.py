@@ -7,26 +7,9 @@ import json
 import sys
 from pathlib import Path
 
-from snakesim.cli.args import agent_options, episodes, goal, load_agent
+from snakesim.cli.args import agent_options, baseline_env_options, episodes, goal, load_agent
 from snakesim.cli.errors import UserError, check_writable
 from snakesim.files import write_atomically
-
-#: Gymnasium ids of the tasks a baseline runs in, by task name.
-TASK_IDS = {
-    "goal": "snakesim/SnakeGoal-v0",
-    "pegs": "snakesim/SnakePegs-v0",
-    "rough": "snakesim/SnakeRough-v0",
-}
-
-
-def task_name(text: str) -> str:
-    """``--env``: a task name or its Gymnasium id, as the task name."""
-    for name, env_id in TASK_IDS.items():
-        if text in (name, env_id):
-            return name
-    raise argparse.ArgumentTypeError(
-        f"unknown task {text!r} (expected one of: {', '.join(TASK_IDS)}, or {', '.join(TASK_IDS.values())})"
-    )
 
 
 def env_line(agent) -> str:
@@ -114,19 +97,7 @@ def add_parser(sub) -> None:
         metavar="X,Y",
         help="a fixed goal instead of the agent's task's (e.g. 0,-10: the paper's task)",
     )
-    p.add_argument(
-        "--env",
-        type=task_name,
-        metavar="TASK",
-        help="for a baseline: the task, goal (default), pegs or rough, or its Gymnasium id "
-        "(snakesim/SnakePegs-v0)",
-    )
-    p.add_argument("--robot", metavar="FILE", help="for a baseline: a robot file instead of the cube snake")
-    p.add_argument(
-        "--env-from",
-        metavar="MODEL",
-        help="for a baseline: exactly the env recorded in MODEL (a native model or a run directory)",
-    )
+    baseline_env_options(p)
     p.add_argument("--episodes", type=episodes, default=100, help="episodes (default 100)")
     p.add_argument(
         "--stochastic", action="store_true", help="sample actions instead of the deterministic policy"

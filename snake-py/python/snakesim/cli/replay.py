@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from snakesim.cli import rerun as rerun_cli
-from snakesim.cli.args import agent_options, int_at_least, load_agent, seconds
+from snakesim.cli.args import agent_options, baseline_env_options, int_at_least, load_agent, seconds
 from snakesim.cli.errors import UserError, check_writable
 from snakesim.files import write_atomically
 from snakesim.limits import LIMITS
@@ -37,7 +37,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         )
         outcome = "reached the goal" if rec.terminated else "did not reach the goal"
         print(f"replayed {rec.duration:.2f} s ({len(rec.times) - 1} steps): {outcome}, return {rec.ret:.1f}")
-    title = args.title if args.title is not None else f"PPO-{agent.arch}, {agent.joints} joints"
+    title = args.title if args.title is not None else f"{agent.label}, {agent.body}"
     for out, kind in zip(outs, kinds):
         if kind == "figure":
             write_atomically(out, lambda tmp: replay.draw_strip(rec, tmp, panels=args.panels, title=title))
@@ -54,6 +54,7 @@ def add_parser(sub) -> None:
         "replay", help="the snake at successive moments (Figure 4), animations and Rerun recordings"
     )
     agent_options(p)
+    baseline_env_options(p)
     p.add_argument(
         "--out",
         "--output",

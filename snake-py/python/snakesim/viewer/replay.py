@@ -2,7 +2,8 @@
 
 Each cube is drawn as a square at its pose with a red line from its centre to the middle of its front
 face (the direction the head crawls at zero yaw, local -y), so the line shows the cube's heading. The
-head cube is drawn darker; the goal is the green disc.
+head cube is drawn darker; the goal is the green disc; the episode's obstacles (a world file's, and
+the pegs a task lays out at each reset) are dark grey footprints.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ EDGE = "#30323a"
 HEADING = "#d62020"
 GOAL = "#2e9e4a"
 TRAIL = "#5a78dc"
+OBSTACLE = "#4a4a4a"
 
 
 class ReplayError(ValueError):
@@ -51,6 +53,8 @@ class Recording:
     terminated: bool  # reached the goal
     ret: float
     shapes: list | None = None  # a robot's collision shapes per part (None: the built-in cubes)
+    # The episode's obstacles as the env laid them out: {"kind", "size", "pose"} (docs/formats.md).
+    obstacles: list = dataclasses.field(default_factory=list)
 
     @property
     def duration(self) -> float:
@@ -76,6 +80,7 @@ def record(
     config = base.config
     step_seconds = config["snake"]["dt"] * config["physics_steps_per_env_step"]
     obs, _ = env.reset(seed=seed)
+    obstacles = json.loads(base._env.world_json()).get("obstacles", [])
     poses = [base.cube_poses()]
     ret, terminated, steps = 0.0, False, 0
     limit = math.inf if seconds is None else seconds
@@ -96,6 +101,7 @@ def record(
         terminated=bool(terminated),
         ret=ret,
         shapes=None if base._env.robot_shapes() is None else json.loads(base._env.robot_shapes()),
+        obstacles=obstacles,
     )
 
 
@@ -199,6 +205,24 @@ def _draw_goal(ax, rec: Recording) -> None:
     ax.plot(*rec.goal, marker="x", color=GOAL, zorder=2)
 
 
+def _draw_obstacles(ax, rec: Recording) -> None:
+    """Each obstacle's footprint seen from above: a disc for a cylinder or sphere (its radius), the
+    rectangle of a box turned by its yaw."""
+    from matplotlib.patches import Circle, Polygon
+
+    for obstacle in rec.obstacles:
+        pose, size = obstacle["pose"], obstacle["size"]
+        style = {"facecolor": OBSTACLE, "edgecolor": OBSTACLE, "alpha": 0.85, "zorder": 1.5}
+        if obstacle["kind"] == "box":
+            yaw = float(_yaw(np.asarray(pose[3:7], dtype=float)[None, :])[0])
+            corners = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]]) * np.array(size[:2]) / 2
+            c, s = math.cos(yaw), math.sin(yaw)
+            xy = corners @ np.array([[c, s], [-s, c]]) + np.array(pose[:2])
+            ax.add_patch(Polygon(xy, closed=True, **style))
+        else:
+            ax.add_patch(Circle((pose[0], pose[1]), size[0], **style))
+
+
 def _indices(rec: Recording, times: np.ndarray) -> np.ndarray:
     step = rec.times[1] - rec.times[0] if len(rec.times) > 1 else 1.0
     return np.clip(np.rint(times / step).astype(int), 0, len(rec.times) - 1)
@@ -240,6 +264,7 @@ def draw_strip(
             ax.set_xlim(centre[0] - half, centre[0] + half)
             ax.set_ylim(centre[1] - half, centre[1] + half)
             _draw_goal(ax, rec)
+            _draw_obstacles(ax, rec)
             ax.plot(xy[: i + 1, 0, 0], xy[: i + 1, 0, 1], color=TRAIL, linewidth=1.0, alpha=0.6, zorder=2)
             _SnakeArtist(ax, xy.shape[1], rec.half_extent, shapes=rec.shapes).update(rec.poses[i])
             to_goal = np.array(rec.goal) - xy[i, 0]
@@ -273,6 +298,7 @@ def draw_strip(
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
         _draw_goal(ax, rec)
+        _draw_obstacles(ax, rec)
         ax.plot(xy[:, 0, 0], xy[:, 0, 1], color=TRAIL, linewidth=1.0, zorder=2)
         for n, i in enumerate(idx):
             _SnakeArtist(
@@ -335,6 +361,7 @@ def render_frames(rec: Recording, fps: float, size: int = 480):
         ax.grid(True, alpha=0.25)
         ax.tick_params(labelsize=7)
         _draw_goal(ax, rec)
+        _draw_obstacles(ax, rec)
         (trail,) = ax.plot([], [], color=TRAIL, linewidth=1.0, zorder=2)
         snake = _SnakeArtist(ax, rec.poses.shape[1], rec.half_extent, shapes=rec.shapes)
         label = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9, zorder=6)
