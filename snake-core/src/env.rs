@@ -267,6 +267,14 @@ pub struct SnakeEnv {
 }
 
 impl SnakeEnv {
+    /// Changes the reward's weights from the next step on (a trainer annealing a term in); the rest of
+    /// the configuration stays. Checked as the configuration's `reward` is.
+    pub fn set_reward(&mut self, reward: RewardConfig) -> Result<()> {
+        reward.validate()?;
+        self.config.reward = reward;
+        Ok(())
+    }
+
     /// An environment with the given configuration; call [`SnakeEnv::reset`] before stepping.
     pub fn new(config: EnvConfig) -> Result<Self> {
         config.validate()?;

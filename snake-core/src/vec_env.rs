@@ -240,6 +240,16 @@ impl VecSnakeEnv {
         &self.config
     }
 
+    /// Changes every env's reward weights from the next step on (see [`SnakeEnv::set_reward`]).
+    pub fn set_reward(&mut self, reward: crate::RewardConfig) -> Result<()> {
+        reward.validate()?;
+        self.config.reward = reward;
+        for slot in &mut self.slots {
+            slot.env.set_reward(reward)?;
+        }
+        Ok(())
+    }
+
     /// The envs, for inspection.
     pub fn envs(&self) -> impl Iterator<Item = &SnakeEnv> {
         self.slots.iter().map(|s| &s.env)

@@ -299,6 +299,10 @@ pub struct RunConfig {
     /// Native trainer: threads for the envs and the updates (null: one per core).
     #[serde(deserialize_with = "integer::option::deserialize")]
     pub threads: Option<usize>,
+    /// Native trainer: anneals `env.reward.energy_weight` in. The training envs' weight is 0 until the
+    /// first timestep count, rises linearly to the configured weight at the second and stays there
+    /// (null: the configured weight throughout). Evaluations always use the configured weight.
+    pub energy_ramp: Option<[u64; 2]>,
     /// PPO's hyperparameters.
     pub ppo: PpoConfig,
     /// More env keywords, as `snakesim.SnakeEnv` takes them (goal, goal_radius, max_episode_steps,
@@ -324,6 +328,7 @@ impl Default for RunConfig {
             device: "auto".into(),
             torch_threads: None,
             threads: None,
+            energy_ramp: None,
             ppo: PpoConfig::default(),
             env: Map::new(),
         }
@@ -340,6 +345,7 @@ pub const IDENTITY_KEYS: &[&str] = &[
     "seed",
     "eval_seed",
     "normalize",
+    "energy_ramp",
     "ppo",
     "env",
 ];
@@ -690,6 +696,24 @@ impl RunConfig {
             check_real("ppo.target_kl", kl, true)?;
         }
         let env = self.env_config()?;
+        if let Some([from, to]) = self.energy_ramp {
+            if from > to || to > MAX_TIMESTEPS {
+                return Err(err(format!(
+                    "energy_ramp: expected [from, to] timesteps with from <= to <= {MAX_TIMESTEPS}, \
+                     got [{from}, {to}]"
+                )));
+            }
+            if env.reward.energy_weight == 0.0 {
+                return Err(err(
+                    "energy_ramp: env.reward.energy_weight is 0, so there is nothing to anneal in",
+                ));
+            }
+            if self.trainer != TrainerKind::Native {
+                return Err(err(
+                    "energy_ramp: only the native trainer anneals the energy weight (trainer: native)",
+                ));
+            }
+        }
         let row_bytes = 4 * (env.observation_dim() + env.action_dim() + 8) as u64;
         if rollout.saturating_mul(row_bytes) > MAX_ROLLOUT_BYTES {
             return Err(err(format!(
@@ -705,6 +729,17 @@ impl RunConfig {
     /// The env the run trains in.
     pub fn env_config(&self) -> Result<EnvConfig, ConfigError> {
         env_config(self.joints, self.preset, &self.env, "env")
+    }
+
+    /// The training envs' energy weight after `timesteps` timesteps (see [`RunConfig::energy_ramp`]),
+    /// given the configured one.
+    pub fn energy_weight_at(&self, timesteps: u64, configured: f64) -> f64 {
+        match self.energy_ramp {
+            None => configured,
+            Some([from, _]) if timesteps < from => 0.0,
+            Some([_, to]) if timesteps >= to => configured,
+            Some([from, to]) => configured * (timesteps - from) as f64 / (to - from) as f64,
+        }
     }
 
     /// The evaluation seed: `eval_seed`, else `seed + 1000`.
@@ -814,6 +849,45 @@ mod tests {
         );
         assert!(error("- 1").starts_with("a configuration must be a mapping"));
         assert!(error("ppo: [1").starts_with("not valid YAML (line 2, column 1): did not find"));
+    }
+
+    #[test]
+    fn energy_ramp_anneals_the_weight_in_and_is_checked() {
+        let c = RunConfig::from_yaml(
+            "energy_ramp: [100, 300]\nenv: {task: goal, reward: {energy_weight: 0.04}}",
+        )
+        .unwrap();
+        let w = c.env_config().unwrap().reward.energy_weight;
+        assert_eq!(w, 0.04);
+        assert_eq!(c.energy_weight_at(0, w), 0.0);
+        assert_eq!(c.energy_weight_at(99, w), 0.0);
+        assert_eq!(c.energy_weight_at(100, w), 0.0);
+        assert_eq!(c.energy_weight_at(200, w), 0.02);
+        assert_eq!(c.energy_weight_at(300, w), 0.04);
+        assert_eq!(c.energy_weight_at(10_000, w), 0.04);
+        let step =
+            RunConfig::from_yaml("energy_ramp: [50, 50]\nenv: {reward: {energy_weight: 0.5}}")
+                .unwrap();
+        assert_eq!(
+            (
+                step.energy_weight_at(49, 0.5),
+                step.energy_weight_at(50, 0.5)
+            ),
+            (0.0, 0.5)
+        );
+        assert_eq!(RunConfig::default().energy_weight_at(0, 0.3), 0.3);
+        assert!(
+            error("energy_ramp: [300, 100]\nenv: {reward: {energy_weight: 1}}")
+                .starts_with("energy_ramp: expected [from, to] timesteps with from <= to")
+        );
+        assert!(error("energy_ramp: [0, 100]")
+            .starts_with("energy_ramp: env.reward.energy_weight is 0"));
+        assert!(
+            error("trainer: sb3\nenergy_ramp: [0, 1]\nenv: {reward: {energy_weight: 1}}")
+                .starts_with("energy_ramp: only the native trainer")
+        );
+        assert!(error("energy_ramp: [-1, 2]").starts_with("energy_ramp"));
+        assert!(IDENTITY_KEYS.contains(&"energy_ramp"));
     }
 
     #[test]

@@ -379,6 +379,8 @@ struct Run {
     last_evaluation: Option<EvaluationRow>,
     /// RSS after this session's first update (see [`Summary::rss_mib`]).
     rss_first_update: Option<f64>,
+    /// The training envs' energy weight in the last rollout, when `energy_ramp` anneals it.
+    ramped_energy_weight: Option<f64>,
 }
 
 impl Run {
@@ -457,6 +459,7 @@ impl Run {
             episodes: std::collections::VecDeque::with_capacity(100),
             last_evaluation: None,
             rss_first_update: None,
+            ramped_energy_weight: None,
             config,
         })
     }
@@ -610,6 +613,15 @@ impl Run {
         while self.timesteps < c.timesteps {
             let rollout_start = Instant::now();
             let trained = self.timesteps;
+            if c.energy_ramp.is_some() {
+                let configured = self.env_config.reward;
+                let weight = c.energy_weight_at(trained, configured.energy_weight);
+                rollout.envs.set_reward(snake_core::RewardConfig {
+                    energy_weight: weight,
+                    ..configured
+                })?;
+                self.ramped_energy_weight = Some(weight);
+            }
             if !self.collect_rollout(&mut rollout, observer)? {
                 return self.interrupted(trained);
             }
@@ -872,6 +884,9 @@ impl Run {
             ("time/update_seconds", update_seconds),
             ("time/rss_mib", rss),
         ];
+        if let Some(w) = self.ramped_energy_weight {
+            scalars.push(("train/energy_weight", w));
+        }
         if let Some(r) = progress.ep_rew_mean {
             scalars.push(("rollout/ep_rew_mean", r));
             scalars.push((

@@ -345,3 +345,35 @@ fn a_non_finite_loss_stops_training_after_saving_the_last_good_state() {
     assert!(steps < 4096);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `energy_ramp` sets the training envs' energy weight: held at 0 (the ramp starts after the run), the
+/// run learns exactly what a run without the term learns, while its evaluations, which use the
+/// configured weight, pay for the energy; the same weight without the ramp changes what is learnt.
+#[test]
+fn energy_ramp_controls_the_training_reward() {
+    let run = |name: &str, extra: Value| {
+        let dir = scratch(name);
+        finished(trainer::train(&session(tiny(extra), &dir, false), &mut Silent).unwrap());
+        let params = model::load_policy(&dir.join("model.safetensors"))
+            .unwrap()
+            .params;
+        let last_return: f64 = evaluations(&dir).last().unwrap()[1].parse().unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        (params, last_return)
+    };
+    let energy = json!({"env": {"reward": {"energy_weight": 5.0}}});
+    let (plain, plain_return) = run("ramp-none", json!({}));
+    let mut held = energy.clone();
+    held["energy_ramp"] = json!([1_000_000, 2_000_000]);
+    let (held_at_zero, held_return) = run("ramp-held", held);
+    let (penalised, _) = run("ramp-off", energy);
+    assert_eq!(held_at_zero, plain, "weight 0 throughout: the same run");
+    assert!(
+        held_return < plain_return,
+        "evaluations use the configured weight: {held_return} against {plain_return}"
+    );
+    assert_ne!(
+        penalised, plain,
+        "the energy term without a ramp changes the run"
+    );
+}

@@ -453,13 +453,19 @@ impl EnvConfig {
                 self.action_scale
             )));
         }
-        let r = &self.reward;
+        self.reward.validate()
+    }
+}
+
+impl RewardConfig {
+    /// Checks every weight against [`MAX_REWARD_WEIGHT`]; the error names the key.
+    pub fn validate(&self) -> Result<()> {
         for (name, w) in [
-            ("reward.distance_weight", r.distance_weight),
-            ("reward.progress_weight", r.progress_weight),
-            ("reward.smoothness_weight", r.smoothness_weight),
-            ("reward.energy_weight", r.energy_weight),
-            ("reward.success_reward", r.success_reward),
+            ("reward.distance_weight", self.distance_weight),
+            ("reward.progress_weight", self.progress_weight),
+            ("reward.smoothness_weight", self.smoothness_weight),
+            ("reward.energy_weight", self.energy_weight),
+            ("reward.success_reward", self.success_reward),
         ] {
             check_range(name, w, -MAX_REWARD_WEIGHT, MAX_REWARD_WEIGHT)?;
         }
