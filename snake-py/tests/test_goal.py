@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import snakesim
 from gymnasium.utils.env_checker import check_env
+from snakesim.agents.loading import env_kwargs_of
 from snakesim.envs.env import SnakeEnv, SnakeGoalEnv, make_env
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -118,12 +119,13 @@ def test_make_env_refuses_an_unknown_task():
         make_env("run")
 
 
-def _evaluate(*args: str) -> dict:
+def _evaluate(*args: str, cwd: Path | None = None) -> dict:
     out = subprocess.run(
         [sys.executable, "-m", "snakesim", "evaluate", *args, "--json", "-"],
         capture_output=True,
         text=True,
         check=True,
+        cwd=cwd,
     )
     return json.loads(out.stdout)
 
@@ -139,12 +141,33 @@ def test_the_steering_baseline_reaches_goals_and_reports_the_metrics():
     assert 0 < report["mean_path_efficiency"] <= 1
 
 
-@pytest.mark.parametrize("model", sorted(p.name for p in MODELS.glob("goal-*.safetensors")))
-def test_shipped_agents_reach_their_goals(model):
+def _flat_goal_task(model: Path) -> bool:
+    env = env_kwargs_of(model)
+    return env.get("task") == "goal" and "robot" not in env
+
+
+# The shipped agents of the flat goal task with the cube snake (goal-N, efficient-10).
+FLAT_GOAL_AGENTS = sorted(p.name for p in MODELS.glob("*.safetensors") if _flat_goal_task(p))
+
+
+@pytest.mark.parametrize("model", FLAT_GOAL_AGENTS)
+def test_shipped_flat_goal_agents_reach_their_goals_and_the_papers(model):
     report = _evaluate(str(MODELS / model), "--episodes", "4", "--seed", "777000")
     assert report["success_rate"] == 1.0, report
     paper = _evaluate(str(MODELS / model), "--episodes", "4", "--seed", "777000", "--goal", "0,-10")
     assert paper["success_rate"] == 1.0, paper
+
+
+def test_the_goal_agents_are_shipped():
+    assert {"goal-5.safetensors", "goal-10.safetensors", "goal-20.safetensors"} <= set(FLAT_GOAL_AGENTS)
+
+
+def test_the_robot_agent_reaches_its_goals_from_any_directory(tmp_path):
+    # Its metadata names robots/yaw-pitch-16.yaml relative to the repository's root, where it was
+    # trained; the model finds the file beside its own directory from anywhere (here: a temp dir).
+    model = MODELS / "goal-yaw-pitch-16.safetensors"
+    report = _evaluate(str(model), "--episodes", "4", "--seed", "777000", cwd=tmp_path)
+    assert report["success_rate"] == 1.0, report
 
 
 def test_a_model_is_shipped():

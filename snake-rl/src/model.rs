@@ -397,8 +397,9 @@ impl<'a> Parsed<'a> {
             .meta("preset")?
             .parse()
             .map_err(|e: snake_core::Error| self.error(e))?;
-        let env: Map<String, Value> = serde_json::from_str(self.meta("env")?)
+        let mut env: Map<String, Value> = serde_json::from_str(self.meta("env")?)
             .map_err(|e| self.error(format!("metadata 'env' is not a JSON mapping ({e})")))?;
+        find_env_files(&mut env, self.path);
         let spec = EnvSpec {
             joints,
             preset,
@@ -443,6 +444,36 @@ impl<'a> Parsed<'a> {
             env: spec,
             timesteps: self.parse("timesteps")?,
         })
+    }
+}
+
+/// The env keys that name files. A model records them as they were given to the trainer, usually
+/// relative to the directory it ran in (the repository's root for the shipped models:
+/// `robots/yaw-pitch-16.yaml`).
+const ENV_FILE_KEYS: [&str; 2] = ["robot", "world"];
+
+/// Makes a model usable from any directory: a relative robot or world path that does not exist from
+/// here is looked up from the model's directory and the one above it (`models/` and `robots/` sit side
+/// by side in the repository; a run's model sits in its run directory), and replaced by the first
+/// found. A path found nowhere is left as it is, for the env's own one-line error.
+fn find_env_files(env: &mut Map<String, Value>, model: &Path) {
+    let dir = model.parent().unwrap_or(Path::new(""));
+    for key in ENV_FILE_KEYS {
+        let Some(Value::String(file)) = env.get(key) else {
+            continue;
+        };
+        let file = Path::new(file);
+        if file.is_absolute() || file.exists() {
+            continue;
+        }
+        let found = [Some(dir), dir.parent()]
+            .into_iter()
+            .flatten()
+            .map(|base| base.join(file))
+            .find(|candidate| candidate.is_file());
+        if let Some(found) = found.as_deref().and_then(Path::to_str) {
+            env.insert(key.to_string(), Value::String(found.to_string()));
+        }
     }
 }
 
