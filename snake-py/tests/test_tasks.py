@@ -95,6 +95,31 @@ def test_baseline_on_exactly_a_models_env(tmp_path, capsys):
         load_agent(str(tmp_path), task="pegs")
 
 
+def _success(*args: str, tmp_path: Path) -> list[bool]:
+    out = tmp_path / "e.json"
+    cli_main(["evaluate", *args, "--episodes", "4", "--seed", "777000", "--json", str(out)])
+    return [e["success"] for e in json.loads(out.read_text())["per_episode"]]
+
+
+# The shipped agents of the tasks (models/*.md hold their 100-episode tables).
+TASK_AGENTS = sorted(p.name for p in (ROOT / "models").glob("*.safetensors") if p.stem.split("-")[0] in TASKS)
+
+
+@pytest.mark.parametrize("model", TASK_AGENTS)
+def test_a_task_agent_reaches_goals_where_steer_fails(model, tmp_path):
+    path = str(ROOT / "models" / model)
+    agent = _success(path, tmp_path=tmp_path)
+    steer = _success("baseline:steer", "--env-from", path, tmp_path=tmp_path)
+    # On the same 4 episodes the agent reaches every goal and beats steer by at least 2 of 4 (its
+    # 100-episode margin is over 0.3 on each task).
+    assert all(agent), agent
+    assert sum(agent) - sum(steer) >= 2, (agent, steer)
+
+
+def test_the_pegs_agent_is_shipped():
+    assert "pegs-10.safetensors" in TASK_AGENTS
+
+
 def test_bad_input_is_one_line(capsys):
     with pytest.raises(ValueError, match=r"^terrain\.pegs\.density") as error:
         snakesim.SnakePegsEnv(terrain={"pegs": {"density": 2}})
