@@ -78,12 +78,22 @@ const TARGETS: [&str; 7] = [
 
 #[test]
 fn the_seeds_parse() {
-    for bytes in seeds("model_file") {
-        snake_rl::model::parse_policy(Path::new("seed"), &bytes).expect("a shipped model loads");
+    for path in files("fuzz/seeds/model_file", None) {
+        let bytes = std::fs::read(&path).unwrap();
+        snake_rl::model::parse_policy(Path::new("seed"), &bytes).expect("a model seed loads");
+    }
+    // From their paths: a robot agent names its robot file relative to the repository's root, and
+    // loading finds it beside models/ whatever the working directory (here tests/).
+    for path in files("models", Some("safetensors")) {
+        snake_rl::model::load_policy(&path).expect("a shipped model loads");
     }
     for bytes in seeds("run_config") {
-        let text = std::str::from_utf8(&bytes).unwrap();
-        let layer = snake_rl::config::parse_yaml(text).expect("a shipped config parses");
+        // A config's robot and world paths are relative to where it runs, the repository's root for
+        // the shipped ones; this test runs in tests/.
+        let text = std::str::from_utf8(&bytes)
+            .unwrap()
+            .replace("robot: robots/", &format!("robot: {ROOT}/robots/"));
+        let layer = snake_rl::config::parse_yaml(&text).expect("a shipped config parses");
         snake_rl::config::RunConfig::from_layers(&[layer]).expect("a shipped config is valid");
     }
     for bytes in seeds("urdf") {
