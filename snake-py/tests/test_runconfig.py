@@ -3,11 +3,13 @@
 import pathlib
 
 import pytest
+from snakesim.agents.loading import env_kwargs_of
 from snakesim.cli import app as cli
 from snakesim.cli import train as cli_train
 from snakesim.runs import config as runconfig
 
 CONFIGS = sorted((pathlib.Path(__file__).resolve().parents[1] / "configs").glob("*.yaml"))
+MODELS = pathlib.Path(__file__).resolve().parents[2] / "models"
 
 
 def test_defaults_are_the_papers_table_1():
@@ -37,29 +39,44 @@ def test_defaults_are_the_papers_table_1():
     assert config["eval_seed"] == 42 + runconfig.EVAL_SEED_OFFSET
 
 
-def test_shipped_configs_are_the_papers_four_runs_and_the_goal_task():
+def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
     names = [path.stem for path in CONFIGS]
     assert names == [
+        "efficient-10",
         "goal-10",
         "goal-20",
         "goal-5",
+        "goal-yaw-pitch-16",
         "paper-large-10",
         "paper-large-5",
         "paper-small-10",
         "paper-small-5",
+        "pegs-10",
+        "rough-10",
     ]
-    for path in CONFIGS[:3]:
-        config = runconfig.load(path)
-        assert config["env"] == {"task": "goal"} and config["preset"] == "paper", path.name
-        assert config["joints"] == int(path.stem.split("-")[1]), path.name
-    for path in CONFIGS[3:]:
-        config = runconfig.load(path)
-        arch, joints = path.stem.split("-")[1:]
-        assert config["arch"] == arch and config["joints"] == int(joints), path.name
+    by_name = dict(zip(names, CONFIGS, strict=True))
+    for name in ("goal-5", "goal-10", "goal-20"):
+        config = runconfig.load(by_name[name])
+        assert config["env"] == {"task": "goal"} and config["preset"] == "paper", name
+        assert config["joints"] == int(name.split("-")[1]), name
+    for name in ("paper-large-10", "paper-large-5", "paper-small-10", "paper-small-5"):
+        config = runconfig.load(by_name[name])
+        arch, joints = name.split("-")[1:]
+        assert config["arch"] == arch and config["joints"] == int(joints), name
         assert config["preset"] == "snakebot-gym" and config["timesteps"] == 20_000_000
         assert config["seed"] == 42 and config["ppo"] == runconfig.DEFAULTS["ppo"]
         # The published ppo_10_arch_shared agent records n_envs 32; the others the code's default 16.
-        assert config["n_envs"] == (32 if path.stem == "paper-large-10" else 16)
+        assert config["n_envs"] == (32 if name == "paper-large-10" else 16)
+
+
+@pytest.mark.parametrize(
+    "path", [p for p in CONFIGS if (MODELS / f"{p.stem}.safetensors").is_file()], ids=lambda p: p.stem
+)
+def test_a_shipped_agents_config_trains_in_the_env_its_model_records(path):
+    # The model's metadata is what snake-rl wrote at the end of the training that the config ran.
+    config = runconfig.load(path)
+    assert runconfig.env_kwargs(config) == env_kwargs_of(MODELS / f"{path.stem}.safetensors")
+    assert config["trainer"] == "native"
 
 
 @pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.name)
