@@ -348,6 +348,8 @@ def test_serve_stops_on_ctrl_c_and_leaves_nothing_behind(gait_run, tmp_path):
     # Served without --rrd: the recording lives in a temporary file until the server stops.
     web, grpc = _free_port(), _free_port()
     env = _env() | {"TMPDIR": str(tmp_path)}
+    # SIGINT as a terminal sends it; the server must not inherit an ignored SIGINT (as a suite run as
+    # a background job without job control would give it: it then never stopped).
     server = subprocess.Popen(
         [sys.executable, "-m", "snakesim", "convert", gait_run / "trace.csv"]
         + ["--serve", "--web-port", str(web), "--grpc-port", str(grpc)],
@@ -355,6 +357,7 @@ def test_serve_stops_on_ctrl_c_and_leaves_nothing_behind(gait_run, tmp_path):
         stderr=subprocess.PIPE,
         text=True,
         env=env,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         assert "recorded 480 physics steps of 4 joints" in server.stdout.readline()
@@ -366,7 +369,12 @@ def test_serve_stops_on_ctrl_c_and_leaves_nothing_behind(gait_run, tmp_path):
             pass
     finally:
         server.send_signal(signal.SIGINT)
-        _, err = server.communicate(timeout=30)
+        try:
+            _, err = server.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            server.terminate()  # its handler stops the Rerun server too: a failure leaves nothing running
+            server.communicate(timeout=30)
+            raise
     assert server.returncode == 0 and err == "", err
     for port in (web, grpc):
         with socket.socket() as s:
