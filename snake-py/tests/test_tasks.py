@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import snakesim
 from snakesim import _core
-from snakesim.agents.loading import AgentError, load_agent
+from snakesim.agents.loading import AgentError, env_kwargs_of, load_agent
 from snakesim.cli import main as cli_main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -101,8 +101,11 @@ def _success(*args: str, tmp_path: Path) -> list[bool]:
     return [e["success"] for e in json.loads(out.read_text())["per_episode"]]
 
 
-# The shipped agents of the tasks (models/*.md hold their 100-episode tables).
-TASK_AGENTS = sorted(p.name for p in (ROOT / "models").glob("*.safetensors") if p.stem.split("-")[0] in TASKS)
+# The shipped agents of the tasks, by the task their metadata records (models/*.md hold their
+# 100-episode tables).
+TASK_AGENTS = sorted(
+    p.name for p in (ROOT / "models").glob("*.safetensors") if env_kwargs_of(p).get("task") in TASKS
+)
 
 
 @pytest.mark.parametrize("model", TASK_AGENTS)
