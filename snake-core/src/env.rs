@@ -3,6 +3,7 @@
 
 mod action;
 mod config;
+mod height_map;
 mod observation;
 mod reward;
 mod terrain;
@@ -21,6 +22,7 @@ pub use action::{
 pub use config::{
     EnvConfig, GoalDistribution, ObservationLayout, StartDistribution, Task, MAX_GOAL_DISTANCE,
 };
+pub use height_map::{HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING};
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
@@ -264,6 +266,8 @@ pub struct SnakeEnv {
     trace: Option<PhysicsTrace>,
     /// The current episode's world, when [`EnvConfig::terrain`] laid one out.
     episode_world: Option<WorldSpec>,
+    /// The current episode's ground, for the terrain observation's height map (the plane otherwise).
+    ground: height_map::GroundProbe,
 }
 
 impl SnakeEnv {
@@ -306,6 +310,7 @@ impl SnakeEnv {
             torques: vec![0.0; n],
             trace: None,
             episode_world: None,
+            ground: height_map::GroundProbe::Plane,
         })
     }
 
@@ -449,6 +454,11 @@ impl SnakeEnv {
             }
         }
         let keep = self.config.terrain.is_some().then(|| world.clone());
+        self.ground = if self.config.observation == ObservationLayout::Terrain {
+            height_map::GroundProbe::of(world)
+        } else {
+            height_map::GroundProbe::Plane
+        };
         let mut body = match &self.config.robot {
             None => EnvBody::Cubes(Snake::in_world(&self.config.snake, start, world)?),
             Some(robot) => EnvBody::Robot(Robot::in_world(robot.spec(), start, world)?),
@@ -470,6 +480,7 @@ impl SnakeEnv {
             snake,
             self.goal,
             self.wave_phase(),
+            &self.ground,
             &mut self.joints,
             obs,
         )?;
@@ -640,6 +651,7 @@ impl SnakeEnv {
             snake,
             self.goal,
             phase.filter(|_| self.config.observes_wave_phase()),
+            &self.ground,
             &mut self.joints,
             obs,
         )?;

@@ -45,7 +45,7 @@ plausible = {
     "max_episode_steps": st.integers(1, 50),
     "physics_steps_per_env_step": st.integers(1, 12),
     "action_scale": st.floats(0.01, 3),
-    "observation": st.sampled_from(["paper", "extended"]),
+    "observation": st.sampled_from(["paper", "extended", "terrain"]),
     "action": st.fixed_dictionaries({"mode": st.sampled_from(["joints", "gait", "residual"])}),
     "reward": st.dictionaries(
         st.sampled_from(["distance_weight", "progress_weight", "smoothness_weight", "energy_weight"]),

@@ -52,6 +52,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "paper-small-10",
         "paper-small-5",
         "pegs-10",
+        "rough-10-blind",
         "rough-10",
     ]
     by_name = dict(zip(names, CONFIGS, strict=True))

@@ -48,6 +48,56 @@ def test_a_seed_gives_one_layout_and_seeds_differ(task):
     assert layout(gymnasium.make(TASKS[task], joints=5), 3) == first
 
 
+def _ground(world: dict, x: float, y: float) -> float:
+    """The drawn heightfield's height at (x, y): bilinear between the four grid points around it."""
+    g = world["ground"]
+    pts = np.asarray(g["points"]).reshape(g["columns"], g["rows"], 3)
+    xs, ys = pts[0, :, 0], pts[:, 0, 1]
+    i = int(np.clip(np.searchsorted(xs, x) - 1, 0, len(xs) - 2))
+    j = int(np.clip(np.searchsorted(ys, y) - 1, 0, len(ys) - 2))
+    fx, fy = (x - xs[i]) / (xs[i + 1] - xs[i]), (y - ys[j]) / (ys[j + 1] - ys[j])
+    z = pts[:, :, 2]
+    return float(
+        (z[j, i] * (1 - fx) + z[j, i + 1] * fx) * (1 - fy) + (z[j + 1, i] * (1 - fx) + z[j + 1, i + 1] * fx) * fy
+    )
+
+
+def test_the_terrain_observation_maps_the_drawn_ground_around_the_head():
+    joints, side, spacing = 10, 5, 0.75
+    import pybullet
+
+    extended = gymnasium.make(TASKS["rough"], joints=joints)
+    terrain = gymnasium.make(TASKS["rough"], joints=joints, observation="terrain")
+    terrain.unwrapped.set_physics_trace(True)
+    dim = extended.observation_space.shape[0]
+    assert terrain.observation_space.shape == (dim + 3 + side * side,)
+    a, _ = extended.reset(seed=5)
+    b, _ = terrain.reset(seed=5)
+    for _ in range(20):
+        a, *_ = extended.step(np.array([0.3, 0.0, 0.0], np.float32))
+        b, *_ = terrain.step(np.array([0.3, 0.0, 0.0], np.float32))
+    # Everything before the map is the extended observation, bit for bit.
+    np.testing.assert_array_equal(a, b[:dim])
+    world = json.loads(terrain.unwrapped._env.world_json())
+    x, y = float(b[0]), float(b[1])
+    s, c = float(b[2 + 2 * joints + 2]), float(b[2 + 2 * joints + 3])
+    up, grid = b[dim : dim + 3], b[dim + 3 :].reshape(side, side)
+    # The world's up in the head frame: the last row of the head's rotation matrix, as pybullet
+    # computes it from the head's quaternion.
+    head = terrain.unwrapped.physics_trace()["poses"][-1][0]
+    rotation = np.array(pybullet.getMatrixFromQuaternion(head[3:])).reshape(3, 3)
+    np.testing.assert_allclose(up, rotation[2], atol=1e-6)
+    # The middle point is the ground under the head less the head's z; every other point is the
+    # ground there, in the head frame (x to the left, y behind), less the same z.
+    head_z = _ground(world, x, y) - grid[2, 2]
+    for i in range(side):
+        for j in range(side):
+            hx, hy = (j - 2) * spacing, (i - 2) * spacing
+            expected = _ground(world, x + c * hx - s * hy, y + s * hx + c * hy) - head_z
+            assert abs(grid[i, j] - expected) < 1e-4, (i, j, grid[i, j], expected)
+    assert np.ptp(grid) > 0.05
+
+
 def test_pegs_lie_between_start_and_goal():
     env = snakesim.SnakePegsEnv(joints=5)
     _, info = env.reset(seed=11)

@@ -13,7 +13,7 @@
 //! | `joints`, `preset` | the snake |
 //! | `env` | the run's env keywords (JSON), as `snakesim.SnakeEnv` takes them |
 //! | `env_config` | the complete resolved env configuration (JSON) |
-//! | `observation` | the observation layout (`paper`, `extended`) |
+//! | `observation` | the observation layout (`paper`, `extended`, `terrain`) |
 //! | `action` | the action layout: `N joint targets in [-1, 1] x action_scale rad, head to tail` |
 //! | `normalize` | `true` when observations are normalised with `obs_rms` (clip 10, eps 1e-8) |
 //! | `timesteps` | timesteps trained |

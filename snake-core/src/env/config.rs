@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::action::{ActionConfig, ActionMode};
+use super::height_map::HEIGHT_MAP_LEN;
 use super::reward::RewardConfig;
 use super::terrain::{PegField, RoughGround, TerrainDistribution};
 use crate::config::{Preset, SnakeConfig};
@@ -219,6 +220,12 @@ pub enum ObservationLayout {
     /// The paper's layout followed by 6 values: the goal vector in the head frame (2), sin and cos of
     /// the heading (2) and the base's planar velocity in the head frame (2); `2 + 2N + 6` in all.
     Extended,
+    /// The extended layout (with the wave's phase where it has one) followed by the world's up
+    /// (its z axis) in the head frame (3: (0, 0, 1) upright, (0, 0, -1) upside down) and a height
+    /// map of the ground around the head ([`super::height_map`]): `HEIGHT_MAP_LEN` (25) heights
+    /// relative to the head's z on a 5 x 5 grid, 0.75 m apart, in the head frame; `2 + 2N + 6 + 3
+    /// + 25` in all.
+    Terrain,
 }
 
 impl ObservationLayout {
@@ -227,14 +234,28 @@ impl ObservationLayout {
         match self {
             ObservationLayout::Paper => 2 + 2 * joints,
             ObservationLayout::Extended => 2 + 2 * joints + 6,
+            ObservationLayout::Terrain => 2 + 2 * joints + 6 + 3 + HEIGHT_MAP_LEN,
         }
     }
+
+    /// Whether the layout holds the extended layout's six values (goal, heading, velocity).
+    pub fn is_extended(self) -> bool {
+        self != ObservationLayout::Paper
+    }
+
+    /// Every layout, in the order the configuration's error message lists them.
+    pub const ALL: [ObservationLayout; 3] = [
+        ObservationLayout::Paper,
+        ObservationLayout::Extended,
+        ObservationLayout::Terrain,
+    ];
 
     /// The configuration name (`paper` or `extended`).
     pub fn name(self) -> &'static str {
         match self {
             ObservationLayout::Paper => "paper",
             ObservationLayout::Extended => "extended",
+            ObservationLayout::Terrain => "terrain",
         }
     }
 }
@@ -243,13 +264,16 @@ impl std::str::FromStr for ObservationLayout {
     type Err = crate::Error;
 
     fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "paper" => Ok(ObservationLayout::Paper),
-            "extended" => Ok(ObservationLayout::Extended),
-            other => Err(invalid(format!(
-                "unknown observation layout '{other}' (expected one of: paper, extended)"
-            ))),
-        }
+        Self::ALL
+            .into_iter()
+            .find(|layout| layout.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::ALL.iter().map(|l| l.name()).collect();
+                invalid(format!(
+                    "unknown observation layout '{s}' (expected one of: {})",
+                    names.join(", ")
+                ))
+            })
     }
 }
 
@@ -405,7 +429,7 @@ impl EnvConfig {
 
     /// Whether the observation ends with the sine and cosine of the wave's phase at the head.
     pub fn observes_wave_phase(&self) -> bool {
-        self.observation == ObservationLayout::Extended && self.action.mode.uses_wave()
+        self.observation.is_extended() && self.action.mode.uses_wave()
     }
 
     /// Checks every field; the one-line error names the first bad one.

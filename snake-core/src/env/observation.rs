@@ -1,6 +1,7 @@
 //! Writing the observation vector.
 
 use super::config::ObservationLayout;
+use super::height_map::{GroundProbe, HEIGHT_MAP_LEN};
 use crate::error::Result;
 use crate::robot::Simulation;
 pub(crate) use crate::world::BaseState;
@@ -29,8 +30,8 @@ impl JointScratch {
     }
 }
 
-/// Fills `obs` (of the layout's length, plus 2 with a wave phase) from the snake's current state;
-/// returns the base state.
+/// Fills `obs` (of the layout's length, plus 2 with a wave phase) from the snake's current state and,
+/// for the terrain layout, from `ground`; returns the base state.
 ///
 /// Every value is the simulator's double cast to `float32` (round to nearest), as the paper's
 /// `np.array(...).astype(np.float32)` does.
@@ -39,6 +40,7 @@ pub(crate) fn write(
     snake: &dyn Simulation,
     goal: (f64, f64),
     wave_phase: Option<f64>,
+    ground: &GroundProbe,
     scratch: &mut JointScratch,
     obs: &mut [f32],
 ) -> Result<BaseState> {
@@ -52,7 +54,8 @@ pub(crate) fn write(
         obs[2 + 2 * j] = scratch.positions[j] as f32;
         obs[3 + 2 * j] = scratch.velocities[j] as f32;
     }
-    if layout == ObservationLayout::Extended {
+    if layout.is_extended() {
+        let q = base.pose.orientation.quaternion().coords; // (x, y, z, w)
         let yaw = heading(&base);
         let (s, c) = yaw.sin_cos();
         // World vectors into the head frame: rotation by -yaw about z.
@@ -68,6 +71,22 @@ pub(crate) fn write(
             let (s, c) = phase.sin_cos();
             obs[2 + 2 * n + 6] = s as f32;
             obs[2 + 2 * n + 7] = c as f32;
+        }
+        if layout == ObservationLayout::Terrain {
+            // After the wave's phase where there is one: the world's up in the head frame, then the
+            // map. The cube snake's joints all turn about its z axis, so the head's up is the whole
+            // body's: on hills it rolls over, and upside down its steering is mirrored.
+            let at = obs.len() - HEIGHT_MAP_LEN;
+            let (x, y, z, w) = (q.x, q.y, q.z, q.w);
+            let up = [
+                2.0 * (x * z - w * y),
+                2.0 * (y * z + w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ];
+            for (o, u) in obs[at - 3..at].iter_mut().zip(up) {
+                *o = u as f32;
+            }
+            ground.write([p.x, p.y, p.z], yaw, &mut obs[at..]);
         }
     }
     Ok(base)

@@ -652,3 +652,41 @@ fn robot_wave_steers_the_envs_way() {
     assert!(right < -120.0, "steering +1 turned {right} degrees");
     assert!(left > 120.0, "steering -1 turned {left} degrees");
 }
+
+#[test]
+fn terrain_observation_is_the_extended_one_then_the_ground_under_and_around_the_head() {
+    use crate::{HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE};
+    let rough = EnvConfig::rough_task(Preset::Paper, 10);
+    let mut extended = env(rough.clone());
+    let mut terrain = env(EnvConfig {
+        observation: ObservationLayout::Terrain,
+        ..rough
+    });
+    let dim = extended.observation_dim();
+    assert_eq!(terrain.observation_dim(), dim + 3 + HEIGHT_MAP_LEN);
+    let (a, _) = extended.reset(Some(3), ResetOptions::default()).unwrap();
+    let (b, _) = terrain.reset(Some(3), ResetOptions::default()).unwrap();
+    assert_eq!(a[..], b[..dim]);
+    // Dropped upright: the world's up is the head's z axis.
+    assert!(b[dim + 2] > 0.99, "{:?}", &b[dim..dim + 3]);
+    let mut last = b;
+    for _ in 0..60 {
+        let sa = extended.step(&[0.0f32, -1.0, -1.0]).unwrap();
+        let sb = terrain.step(&[0.0f32, -1.0, -1.0]).unwrap();
+        assert_eq!(sa.obs[..], sb.obs[..dim]);
+        last = sb.obs;
+    }
+    let up = &last[dim..dim + 3];
+    let norm = up.iter().map(|u| u * u).sum::<f32>().sqrt();
+    assert!((norm - 1.0).abs() < 1e-5, "{up:?}");
+    let map = &last[dim + 3..];
+    // The cube snake's yaw joints keep it straight in the vertical plane, so on hills its head is
+    // often off the ground (height_map's tests check the map where it rests): below it, not above.
+    let c = HEIGHT_MAP_SIDE / 2;
+    assert!(map[c * HEIGHT_MAP_SIDE + c] < -0.2, "{map:?}");
+    // On hills up to 1.2 m the map is not flat.
+    let (lo, hi) = map
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+    assert!(hi - lo > 0.05, "{map:?}");
+}

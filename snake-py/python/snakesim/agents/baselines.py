@@ -20,7 +20,8 @@ NAMES = ("gait", "steer")
 
 def goal_bearing(obs: np.ndarray, joints: int) -> np.ndarray:
     """The goal's bearing from the head, radians (0 ahead, positive to the left), per row of ``obs``
-    (the extended layout: the goal vector in the head frame follows the paper's 2 + 2N values)."""
+    (the extended and terrain layouts: the goal vector in the head frame follows the paper's 2 + 2N
+    values)."""
     gx, gy = obs[:, 2 + 2 * joints], obs[:, 3 + 2 * joints]
     # The head frame's -y points ahead and its +x to the left.
     return np.arctan2(gx, -gy)
@@ -44,9 +45,9 @@ class Controller:
 
 def check_env(config: dict[str, Any]) -> None:
     """Raises ValueError unless the resolved env ``config`` has what the baselines need."""
-    if config["action"]["mode"] != "gait" or config["observation"] != "extended":
+    if config["action"]["mode"] != "gait" or config["observation"] not in ("extended", "terrain"):
         raise ValueError(
-            "the baselines need action mode 'gait' and observation 'extended', got "
+            "the baselines need action mode 'gait' and observation 'extended' or 'terrain', got "
             f"{config['action']['mode']!r} and {config['observation']!r}"
         )
 

@@ -41,7 +41,12 @@ class SnakeEnv(gymnasium.Env):
     (head) x, base y, then for each joint its (angle, velocity) pair, interleaved. With
     ``observation="extended"`` six values follow: the goal vector in the head frame (2), sin and cos of
     the heading (2) and the head's planar velocity in the head frame (2); in the gait and residual
-    action modes two more, sin and cos of the wave's phase at the head.
+    action modes two more, sin and cos of the wave's phase at the head. ``observation="terrain"``
+    adds to that the world's up in the head frame (3 values; (0, 0, 1) upright) and a height map of
+    the ground around the head (25 values, last): the ground's height minus the head's z at a 5 x 5
+    grid of points 0.75 m apart, centred on the head and turned with its heading: five rows from
+    1.5 m ahead to 1.5 m behind, each from 1.5 m to the right to 1.5 m to the left (docs/tasks.md,
+    "The terrain observation").
 
     **Reward**: minus the planar head-goal distance (times ``reward["distance_weight"]``, 1); 100
     instead once the head is within ``goal_radius`` of the goal. Optional terms (``reward={...}``, off

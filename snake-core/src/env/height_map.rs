@@ -1,0 +1,219 @@
+//! The `terrain` observation's height map: the ground's height at a square grid of points around the
+//! head, in the head's frame, relative to the head. A policy on rough ground without it is blind to
+//! the hills it is about to climb or slide into (docs/tasks.md, "What did not work").
+//!
+//! Heights are read from the episode's world description, not from Bullet's collision shape: a
+//! heightfield is interpolated bilinearly between its four nearest samples (Bullet's two triangles per
+//! cell differ from that by at most the cell's twist, millimetres on the rough task's 0.125 m grid),
+//! and points beyond the grid take its nearest edge. Obstacles are not in the map.
+
+use crate::world_file::{Ground, WorldSpec};
+
+/// Points per side of the square grid.
+pub const HEIGHT_MAP_SIDE: usize = 5;
+
+/// Distance between neighbouring points of the grid, metres: the map reaches
+/// `(HEIGHT_MAP_SIDE - 1) / 2 * HEIGHT_MAP_SPACING` = 1.5 m ahead, behind and to each side of the
+/// head, half the rough task's hill wavelength, so that a hill's crest or a valley's floor is in
+/// view before the head reaches it.
+pub const HEIGHT_MAP_SPACING: f64 = 0.75;
+
+/// Values the map adds to the observation.
+pub const HEIGHT_MAP_LEN: usize = HEIGHT_MAP_SIDE * HEIGHT_MAP_SIDE;
+
+/// The episode's ground, ready to be sampled at any planar point.
+#[derive(Debug, Clone, Default)]
+pub(crate) enum GroundProbe {
+    /// The plane z = 0.
+    #[default]
+    Plane,
+    /// The plane tilted about x: the height is `y * slope`.
+    Slope(f64),
+    /// A heightfield grid, placed as Bullet places it ([`crate::world_file::Heightfield::point`]).
+    Grid {
+        rows: usize,
+        columns: usize,
+        heights: Vec<f32>,
+        scale: [f64; 3],
+        /// The middle of the lowest and highest sample, Bullet's z = 0 of the grid (found once).
+        middle: f64,
+    },
+}
+
+impl GroundProbe {
+    /// The probe of `world`'s ground.
+    pub fn of(world: &WorldSpec) -> Self {
+        match &world.ground {
+            Ground::Plane => GroundProbe::Plane,
+            Ground::Slope(degrees) => GroundProbe::Slope(degrees.to_radians().tan()),
+            Ground::Heightfield(h) => {
+                let (lo, hi) = h.min_max();
+                GroundProbe::Grid {
+                    rows: h.rows,
+                    columns: h.columns,
+                    heights: h.heights.clone(),
+                    scale: h.scale,
+                    middle: 0.5 * (lo as f64 + hi as f64),
+                }
+            }
+        }
+    }
+
+    /// The ground's height at world (x, y), metres.
+    pub fn height(&self, x: f64, y: f64) -> f64 {
+        match self {
+            GroundProbe::Plane => 0.0,
+            GroundProbe::Slope(slope) => y * slope,
+            GroundProbe::Grid {
+                rows,
+                columns,
+                heights,
+                scale,
+                middle,
+            } => {
+                // Grid coordinates of (x, y), clamped to the grid (its edge continues outwards).
+                let cell = |v: f64, n: usize, s: f64| {
+                    let last = (n - 1) as f64;
+                    let u = (v / s + 0.5 * last).clamp(0.0, last);
+                    let i = (u.floor() as usize).min(n.saturating_sub(2));
+                    (i, u - i as f64)
+                };
+                let (ix, fx) = cell(x, *rows, scale[0]);
+                let (iy, fy) = cell(y, *columns, scale[1]);
+                let at = |i: usize, j: usize| {
+                    let i = i.min(rows - 1);
+                    let j = j.min(columns - 1);
+                    heights[j * rows + i] as f64
+                };
+                let low = at(ix, iy) * (1.0 - fx) + at(ix + 1, iy) * fx;
+                let high = at(ix, iy + 1) * (1.0 - fx) + at(ix + 1, iy + 1) * fx;
+                (low * (1.0 - fy) + high * fy - middle) * scale[2]
+            }
+        }
+    }
+
+    /// Writes the map (`HEIGHT_MAP_LEN` values) for a head at `position` with planar heading `yaw`
+    /// (see [`super::observation::heading`]): point (i, j), at index `i * HEIGHT_MAP_SIDE + j`, lies
+    /// `(j - c) * HEIGHT_MAP_SPACING` along the head frame's x and `(i - c) * HEIGHT_MAP_SPACING`
+    /// along its y (c = the middle index; the head frame's -y points ahead and +x to the left), and
+    /// holds the ground's height there minus the head's z.
+    pub fn write(&self, position: [f64; 3], yaw: f64, out: &mut [f32]) {
+        let (s, c) = yaw.sin_cos();
+        let middle = (HEIGHT_MAP_SIDE / 2) as f64;
+        for i in 0..HEIGHT_MAP_SIDE {
+            let hy = (i as f64 - middle) * HEIGHT_MAP_SPACING;
+            for j in 0..HEIGHT_MAP_SIDE {
+                let hx = (j as f64 - middle) * HEIGHT_MAP_SPACING;
+                // Head frame to world: rotation by +yaw about z.
+                let (x, y) = (position[0] + c * hx - s * hy, position[1] + s * hx + c * hy);
+                out[i * HEIGHT_MAP_SIDE + j] = (self.height(x, y) - position[2]) as f32;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world_file::Heightfield;
+
+    fn grid() -> Heightfield {
+        // 3 x 2 samples, spacing 0.5 along x and 2 along y, heights doubled.
+        Heightfield {
+            rows: 3,
+            columns: 2,
+            heights: vec![0.0, 1.0, 2.0, 4.0, 5.0, 6.0],
+            scale: [0.5, 2.0, 2.0],
+        }
+    }
+
+    #[test]
+    fn grid_points_give_bullets_heights_and_between_them_the_bilinear_mean() {
+        let h = grid();
+        let world = WorldSpec {
+            ground: Ground::Heightfield(h.clone()),
+            ..WorldSpec::default()
+        };
+        let probe = GroundProbe::of(&world);
+        for y in 0..2 {
+            for x in 0..3 {
+                let [px, py, pz] = h.point(x, y);
+                assert!((probe.height(px, py) - pz).abs() < 1e-12, "({x}, {y})");
+            }
+        }
+        // Halfway between the four samples 0, 1, 4, 5: 2.5, less the middle 3, times 2.
+        let [x0, y0, _] = h.point(0, 0);
+        assert!((probe.height(x0 + 0.25, y0 + 1.0) - (-1.0)).abs() < 1e-12);
+        // Beyond the grid: its nearest edge.
+        let [x2, y1, z21] = h.point(2, 1);
+        assert!((probe.height(x2 + 10.0, y1 + 10.0) - z21).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_head_resting_on_bullets_heightfield_is_its_half_extent_above_the_probed_ground() {
+        // A ramp rising along x by 0.2 per metre (samples 0.05 apart on a 0.25 m grid), centred by
+        // Bullet at its middle height; the snake lies along y, on the ramp's contour, so that its
+        // stiff vertical plane rests every cube on the ground. Reading the grid transposed or
+        // mirrored, or placing it at another height, misses by decimetres.
+        let n = 41;
+        let heights: Vec<f32> = (0..n * n).map(|k| 0.05 * (k % n) as f32).collect();
+        let world = WorldSpec {
+            ground: Ground::Heightfield(Heightfield {
+                rows: n,
+                columns: n,
+                heights,
+                scale: [0.25, 0.25, 1.0],
+            }),
+            ..WorldSpec::default()
+        };
+        let start = crate::math::StartPose {
+            x: 0.3,
+            y: -0.2,
+            z: 0.5,
+            yaw: 0.0,
+        };
+        let config = crate::Preset::Paper.config(5);
+        let mut snake = crate::Snake::in_world(&config, start, &world).unwrap();
+        for _ in 0..480 {
+            crate::robot::Simulation::step(&mut snake).unwrap();
+        }
+        let base = crate::robot::Simulation::base_state(&snake).unwrap();
+        let p = base.pose.position;
+        let mut map = [0.0_f32; HEIGHT_MAP_LEN];
+        GroundProbe::of(&world).write([p.x, p.y, p.z], 0.0, &mut map);
+        // The cube's centre stands 0.25 / cos(slope) above the ground below it.
+        let expected = -0.25 / 0.2_f64.atan().cos();
+        let c = HEIGHT_MAP_SIDE / 2;
+        let under = map[c * HEIGHT_MAP_SIDE + c] as f64;
+        assert!((under - expected).abs() < 5e-3, "{under} {expected}");
+        // Each point to the left (+x) is 0.2 * spacing higher.
+        for j in 1..HEIGHT_MAP_SIDE {
+            let rise = (map[c * HEIGHT_MAP_SIDE + j] - map[c * HEIGHT_MAP_SIDE + j - 1]) as f64;
+            assert!((rise - 0.2 * HEIGHT_MAP_SPACING).abs() < 1e-5, "{map:?}");
+        }
+    }
+
+    #[test]
+    fn planes_and_the_map_in_the_head_frame() {
+        assert_eq!(
+            GroundProbe::of(&WorldSpec::default()).height(3.0, -2.0),
+            0.0
+        );
+        let slope = GroundProbe::of(&WorldSpec {
+            ground: Ground::Slope(45.0),
+            ..WorldSpec::default()
+        });
+        assert!((slope.height(7.0, 2.0) - 2.0).abs() < 1e-12);
+        // Heading 90 degrees: the head frame's x is world y, its -y world x (ahead).
+        let mut out = [0.0_f32; HEIGHT_MAP_LEN];
+        slope.write([1.0, 0.0, 0.25], std::f64::consts::FRAC_PI_2, &mut out);
+        let c = HEIGHT_MAP_SIDE / 2;
+        assert_eq!(out[c * HEIGHT_MAP_SIDE + c], -0.25);
+        // One point to the left (+x of the head frame) is world y = +spacing: higher by spacing.
+        let left = out[c * HEIGHT_MAP_SIDE + c + 1] as f64;
+        assert!((left - (HEIGHT_MAP_SPACING - 0.25)).abs() < 1e-6, "{left}");
+        // One point behind (+y of the head frame) is world x - spacing: the same height.
+        let behind = out[(c + 1) * HEIGHT_MAP_SIDE + c] as f64;
+        assert!((behind + 0.25).abs() < 1e-6, "{behind}");
+    }
+}
