@@ -57,9 +57,9 @@ def _ground(world: dict, x: float, y: float) -> float:
     j = int(np.clip(np.searchsorted(ys, y) - 1, 0, len(ys) - 2))
     fx, fy = (x - xs[i]) / (xs[i + 1] - xs[i]), (y - ys[j]) / (ys[j + 1] - ys[j])
     z = pts[:, :, 2]
-    return float(
-        (z[j, i] * (1 - fx) + z[j, i + 1] * fx) * (1 - fy) + (z[j + 1, i] * (1 - fx) + z[j + 1, i + 1] * fx) * fy
-    )
+    low = z[j, i] * (1 - fx) + z[j, i + 1] * fx
+    high = z[j + 1, i] * (1 - fx) + z[j + 1, i + 1] * fx
+    return float(low * (1 - fy) + high * fy)
 
 
 def test_the_terrain_observation_maps_the_drawn_ground_around_the_head():
