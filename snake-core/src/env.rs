@@ -32,7 +32,7 @@ pub use trace::PhysicsTrace;
 use crate::error::{invalid, Result};
 use crate::math::StartPose;
 use crate::robot::Simulation;
-use crate::world_file::WorldSpec;
+use crate::world_file::{Ground, WorldSpec};
 use crate::{Robot, Snake};
 use action::Driver;
 use observation::JointScratch;
@@ -268,6 +268,9 @@ pub struct SnakeEnv {
     episode_world: Option<WorldSpec>,
     /// The current episode's ground, for the terrain observation's height map (the plane otherwise).
     ground: height_map::GroundProbe,
+    /// Half the extent along x and y of the rough ground that [`EnvConfig::terrain`] laid out: the
+    /// episode ends (terminated, unsuccessful) once the head is beyond it, falling off the world.
+    ground_edge: Option<(f64, f64)>,
 }
 
 impl SnakeEnv {
@@ -311,6 +314,7 @@ impl SnakeEnv {
             trace: None,
             episode_world: None,
             ground: height_map::GroundProbe::Plane,
+            ground_edge: None,
         })
     }
 
@@ -454,6 +458,10 @@ impl SnakeEnv {
             }
         }
         let keep = self.config.terrain.is_some().then(|| world.clone());
+        self.ground_edge = match (&self.config.terrain, &world.ground) {
+            (Some(t), Ground::Heightfield(h)) if t.rough.is_some() => Some(h.half_extents()),
+            _ => None,
+        };
         self.ground = if self.config.observation == ObservationLayout::Terrain {
             height_map::GroundProbe::of(world)
         } else {
@@ -560,7 +568,12 @@ impl SnakeEnv {
         }
         self.episode_step += 1;
         self.episode_return += reward;
-        let terminated = success;
+        // Beyond the edge of the task's rough ground there is nothing: the body falls for the rest
+        // of the episode, which can no longer succeed (10 % of steer's episodes did so before).
+        let off_ground = self
+            .ground_edge
+            .is_some_and(|(hx, hy)| p.0.abs() > hx || p.1.abs() > hy);
+        let terminated = success || off_ground;
         let truncated = self.episode_step >= self.config.max_episode_steps;
         if terminated || truncated {
             self.phase = Phase::Done;

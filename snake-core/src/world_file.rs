@@ -309,6 +309,14 @@ impl Heightfield {
             })
     }
 
+    /// Half the grid's extent along x and along y, metres: Bullet centres it on the origin.
+    pub fn half_extents(&self) -> (f64, f64) {
+        (
+            0.5 * (self.rows - 1) as f64 * self.scale[0],
+            0.5 * (self.columns - 1) as f64 * self.scale[1],
+        )
+    }
+
     /// World position of grid point (x, y) as Bullet places it: centred on the origin, in z at the
     /// middle of the lowest and highest sample.
     pub fn point(&self, x: usize, y: usize) -> [f64; 3] {

@@ -343,7 +343,8 @@ impl EnvConfig {
     /// actions, observation and reward, a goal 5-8 m from the start in any direction, and new
     /// [`RoughGround`] at each reset (its defaults: 8 cm bumps 0.5 m apart on 1.2 m hills 3 m apart,
     /// sampled every 0.125 m to 3 m beyond start and goal); the start is raised by the ground's
-    /// highest point within 1.5 m of the origin; episodes of at most 900 env steps (30 s).
+    /// highest point within 1.5 m of the origin; episodes of at most 900 env steps (30 s), ended
+    /// early when the head leaves the ground's square.
     pub fn rough_task(preset: Preset, joints: usize) -> Self {
         EnvConfig {
             goal_distribution: Some(GoalDistribution {

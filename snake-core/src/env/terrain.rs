@@ -22,7 +22,8 @@ pub struct TerrainDistribution {
     /// A peg field in a band from the start towards the goal (`None`: no pegs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pegs: Option<PegField>,
-    /// Rough ground replacing the ground (`None`: the world's ground).
+    /// Rough ground replacing the ground (`None`: the world's ground). An episode ends (terminated,
+    /// unsuccessful) when the head leaves its square: beyond it the body falls off the world.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rough: Option<RoughGround>,
 }

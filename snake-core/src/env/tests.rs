@@ -690,3 +690,39 @@ fn terrain_observation_is_the_extended_one_then_the_ground_under_and_around_the_
         .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
     assert!(hi - lo > 0.05, "{map:?}");
 }
+
+#[test]
+fn the_rough_task_ends_an_episode_whose_head_leaves_the_ground() {
+    // A flat heightfield reaching 0.5 m beyond a goal 5 m behind the start: the unsteered wave
+    // crawls ahead (-y) and off the grid's edge at y = -5.5 m.
+    let mut config = EnvConfig::rough_task(Preset::Paper, 10);
+    let rough = config.terrain.as_mut().unwrap().rough.as_mut().unwrap();
+    (rough.amplitude, rough.hills_amplitude, rough.margin) = (0.0, 0.0, 0.5);
+    let mut e = env(config);
+    let start = StartPose {
+        x: 0.0,
+        y: 0.0,
+        z: 0.5,
+        yaw: 0.0,
+    };
+    let options = ResetOptions {
+        start: Some(start),
+        goal: Some((0.0, 5.0)),
+    };
+    e.reset(Some(1), options).unwrap();
+    let mut last_y = 0.0;
+    for _ in 0..900 {
+        let s = e.step(&[0.0f32, 0.0, 0.0]).unwrap();
+        let y = s.obs[1] as f64;
+        if s.terminated {
+            assert!(
+                !s.info.success && y < -5.5 && last_y >= -5.5,
+                "{last_y} {y}"
+            );
+            return;
+        }
+        assert!(!s.truncated, "the head never left the ground (y {y})");
+        last_y = y;
+    }
+    panic!("the episode did not end");
+}
