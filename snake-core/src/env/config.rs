@@ -250,7 +250,7 @@ impl ObservationLayout {
         ObservationLayout::Terrain,
     ];
 
-    /// The configuration name (`paper` or `extended`).
+    /// The configuration name (`paper`, `extended` or `terrain`).
     pub fn name(self) -> &'static str {
         match self {
             ObservationLayout::Paper => "paper",
