@@ -51,6 +51,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "paper-large-5",
         "paper-small-10",
         "paper-small-5",
+        "paper-tuned-5",
         "pegs-10",
         "rough-10-blind",
         "rough-10",
