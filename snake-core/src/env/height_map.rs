@@ -153,8 +153,8 @@ mod tests {
     fn a_head_resting_on_bullets_heightfield_is_its_half_extent_above_the_probed_ground() {
         // A ramp rising along x by 0.2 per metre (samples 0.05 apart on a 0.25 m grid), centred by
         // Bullet at its middle height; the snake lies along y, on the ramp's contour, so that its
-        // stiff vertical plane rests every cube on the ground. Reading the grid transposed or
-        // mirrored, or placing it at another height, misses by decimetres.
+        // stiff vertical plane rests every cube on the ground. Reading the grid transposed misses
+        // the head's height by 9 cm; mirrored, the map's slope has the wrong sign.
         let n = 41;
         let heights: Vec<f32> = (0..n * n).map(|k| 0.05 * (k % n) as f32).collect();
         let world = WorldSpec {
