@@ -333,7 +333,7 @@ impl Heightfield {
     }
 
     /// Middle of the lowest and highest sample, where Bullet puts z = 0 of the grid.
-    fn middle(&self) -> f64 {
+    pub(crate) fn middle(&self) -> f64 {
         let (lo, hi) = self.min_max();
         0.5 * (lo as f64 + hi as f64)
     }

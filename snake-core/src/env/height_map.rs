@@ -46,16 +46,13 @@ impl GroundProbe {
         match &world.ground {
             Ground::Plane => GroundProbe::Plane,
             Ground::Slope(degrees) => GroundProbe::Slope(degrees.to_radians().tan()),
-            Ground::Heightfield(h) => {
-                let (lo, hi) = h.min_max();
-                GroundProbe::Grid {
-                    rows: h.rows,
-                    columns: h.columns,
-                    heights: h.heights.clone(),
-                    scale: h.scale,
-                    middle: 0.5 * (lo as f64 + hi as f64),
-                }
-            }
+            Ground::Heightfield(h) => GroundProbe::Grid {
+                rows: h.rows,
+                columns: h.columns,
+                heights: h.heights.clone(),
+                scale: h.scale,
+                middle: h.middle(),
+            },
         }
     }
 

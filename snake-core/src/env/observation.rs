@@ -55,7 +55,6 @@ pub(crate) fn write(
         obs[3 + 2 * j] = scratch.velocities[j] as f32;
     }
     if layout.is_extended() {
-        let q = base.pose.orientation.quaternion().coords; // (x, y, z, w)
         let yaw = heading(&base);
         let (s, c) = yaw.sin_cos();
         // World vectors into the head frame: rotation by -yaw about z.
@@ -77,14 +76,12 @@ pub(crate) fn write(
             // map. The cube snake's joints all turn about its z axis, so the head's up is the whole
             // body's: on hills it rolls over, and upside down its steering is mirrored.
             let at = obs.len() - HEIGHT_MAP_LEN;
-            let (x, y, z, w) = (q.x, q.y, q.z, q.w);
-            let up = [
-                2.0 * (x * z - w * y),
-                2.0 * (y * z + w * x),
-                1.0 - 2.0 * (x * x + y * y),
-            ];
-            for (o, u) in obs[at - 3..at].iter_mut().zip(up) {
-                *o = u as f32;
+            let up = base
+                .pose
+                .orientation
+                .inverse_transform_vector(&nalgebra::Vector3::z());
+            for (o, u) in obs[at - 3..at].iter_mut().zip(up.iter()) {
+                *o = *u as f32;
             }
             ground.write([p.x, p.y, p.z], yaw, &mut obs[at..]);
         }
