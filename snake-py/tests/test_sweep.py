@@ -199,6 +199,44 @@ def test_sweep_of_two_configs_and_two_seeds_on_a_cluster(cluster, tmp_path, caps
         assert image.size == (1050, 675)
 
 
+def test_a_search_for_success_auc_on_a_cluster(cluster, tmp_path):
+    # The goal lies 10 m from the start: a goal radius above 10 succeeds at every step, one below it
+    # never does in these few timesteps, so a trial's success_auc is 1 or 0 by its radius alone.
+    base = write_config(tmp_path, "base", {**NEAR, "eval_freq": 512})
+    space = tmp_path / "space.yaml"
+    space.write_text("env.goal_radius: {uniform: [8.0, 12.0]}\nppo.n_epochs: {randint: [1, 3]}\n")
+    out = tmp_path / "search"
+    done = snakesim(
+        "search", base, "--space", space, "--trials", 6, "--metric", "success_auc", "--out", out,
+        "--address", cluster["address"], "--cpus-per-trial", 1, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+
+    # success_auc, computed here from each trial's evaluations.csv: the mean of its success rates.
+    aucs = {}
+    for run in sorted((out / "trials").iterdir()):
+        config = yaml.safe_load((run / "config.yaml").read_text())
+        assert 8.0 <= config["env"]["goal_radius"] <= 12.0 and 1 <= config["ppo"]["n_epochs"] <= 3
+        rates = [float(r["success_rate"]) for r in read_csv(run / "evaluations.csv")]
+        assert set(rates) == ({1.0} if config["env"]["goal_radius"] > 10.0 else {0.0})
+        aucs[run.name] = (sum(rates) / len(rates), len(rates), config["env"]["goal_radius"])
+    assert len(aucs) == 6
+
+    # best.yaml is the trial with the highest success_auc (more evaluations break ties).
+    best = max(aucs, key=lambda name: aucs[name][:2])
+    header = (out / "best.yaml").read_text().splitlines()[0]
+    assert header == f"# The best trial of the search {out} ({best}): final success_auc {aucs[best][0]:.4g}."
+    assert yaml.safe_load((out / "best.yaml").read_text())["env"]["goal_radius"] == aucs[best][2]
+
+    # Optuna's importance of the two keys for the final success_auc, written and printed.
+    record = json.loads((out / "importance.json").read_text())
+    assert record["metric"] == "success_auc" and record["trials"] == 6
+    assert sorted(record["importance"]) == ["env.goal_radius", "ppo.n_epochs"]
+    assert sum(record["importance"].values()) == pytest.approx(1.0)
+    assert "importance for the final success_auc over 6 trials: " in done.stdout
+
+
 def test_a_killed_trial_resumes_from_its_checkpoint(cluster, tmp_path):
     fault = write_config(tmp_path, "fault", TINY)
     out = tmp_path / "sweep"

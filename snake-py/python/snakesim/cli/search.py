@@ -38,7 +38,15 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--trials", required=True, metavar="T", type=int_at_least(1, sweep.MAX_TRIALS), help="trials to run"
     )
-    p.add_argument("--metric", choices=("success_rate", "mean_return"), default="success_rate")
+    from snakesim.sweeps.search import METRICS
+
+    p.add_argument(
+        "--metric",
+        choices=METRICS,
+        default=METRICS[0],
+        help="maximised: the last evaluation's success_rate or mean_return, or success_auc (the mean success "
+        "rate over the run's evaluations, which rewards learning early)",
+    )
     p.add_argument(
         "--out",
         "--output",

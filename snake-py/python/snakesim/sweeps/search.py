@@ -17,6 +17,7 @@ distribution::
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import sys
@@ -31,13 +32,19 @@ from snakesim.runs import config as runconfig
 from snakesim.sweeps import plan as sweep
 
 DISTRIBUTIONS = ("uniform", "loguniform", "randint", "choice")
-METRICS = ("success_rate", "mean_return")
+#: What a search maximises: the last evaluation's success rate or mean return, or the mean success
+#: rate over all the run's evaluations (snakesim.sweeps.summary.with_success_auc), which rewards
+#: learning early.
+METRICS = ("success_rate", "mean_return", "success_auc")
 BEST_FILE = "best.yaml"
+IMPORTANCE_FILE = "importance.json"
 #: Most keys in a space.
 MAX_SPACE_KEYS = LIMITS["search_keys"]
 #: ASHA lets every trial train this share of the timesteps before it may stop it.
 GRACE_SHARE = 0.25
 ASHA_REDUCTION_FACTOR = 3
+#: Fewest evaluated trials Optuna's importance is computed from.
+MIN_IMPORTANCE_TRIALS = 4
 
 
 def _flatten(space: Mapping[str, Any], prefix: str = "") -> dict[str, dict[str, Any]]:
@@ -133,7 +140,7 @@ def search(
     space: str | os.PathLike,
     out: str | os.PathLike,
     trials: int,
-    metric: str = "success_rate",
+    metric: str = METRICS[0],
     sets: Sequence[str] = (),
     address: str | None = None,
     cpus_per_trial: int = sweep.DEFAULT_CPUS_PER_TRIAL,
@@ -230,6 +237,7 @@ def search(
             f"best: {trial.name} ({', '.join(f'{k}={v}' for k, v in trial.point.items())}): final {metric} "
             f"{value:.4g}; wrote {path}; train it with: snakesim train --config {path}"
         )
+        print(write_importance(out_path, parsed, done, metric))
         return 130 if outcome.interrupted else 0
 
 
@@ -262,13 +270,7 @@ def _searched_trials(
 
 def _best(out: Path, trials: Sequence[sweep.Trial], metric: str) -> tuple[sweep.Trial, float] | None:
     """The trial with the best final evaluation (more timesteps break ties: ASHA stopped the others)."""
-    from snakesim.sweeps.summary import evaluations
-
-    scored = []
-    for trial in trials:
-        rows = evaluations(trial.run_dir(out))
-        if rows:
-            scored.append(((rows[-1][metric], rows[-1]["timesteps"]), trial))
+    scored = [((last[metric], last["timesteps"]), trial) for trial, last in _finals(out, trials)]
     if not scored:
         return None
     (value, _), trial = max(scored, key=lambda item: item[0])
@@ -284,3 +286,73 @@ def write_best(out: Path, overrides: Mapping[str, Any], name: str, metric: str, 
     path = out / BEST_FILE
     write_atomically(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
     return path
+
+
+def _finals(out: Path, trials: Sequence[sweep.Trial]) -> list[tuple[sweep.Trial, dict[str, float]]]:
+    """Each evaluated trial with its last evaluation, success_auc included (at the timesteps where it
+    ended: the end of the budget, or where ASHA stopped it)."""
+    from snakesim.sweeps.summary import evaluations, with_success_auc
+
+    found = []
+    for trial in trials:
+        rows = with_success_auc(evaluations(trial.run_dir(out)))
+        if rows:
+            found.append((trial, rows[-1]))
+    return found
+
+
+def _optuna_value(value: Any) -> Any:
+    """A choice as Optuna's categorical distributions take it (a list or mapping as its JSON text)."""
+    return value if value is None or isinstance(value, (bool, int, float, str)) else json.dumps(value)
+
+
+def importance(
+    space: Mapping[str, tuple[str, list[Any]]], finals: Sequence[tuple[Mapping[str, Any], float]]
+) -> dict[str, float]:
+    """Optuna's importance of each searched key for ``finals`` (each trial's values and final metric,
+    maximised), from Optuna's default evaluator (PED-ANOVA in Optuna 4 and 5): a study is rebuilt from
+    the trials, as Tune's OptunaSearch saw them, ASHA-stopped trials with their value where they
+    stopped. The importances are normalised to sum to 1."""
+    import optuna
+    from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
+
+    make = {
+        "uniform": lambda a: FloatDistribution(a[0], a[1]),
+        "loguniform": lambda a: FloatDistribution(a[0], a[1], log=True),
+        "randint": lambda a: IntDistribution(a[0], a[1]),
+        "choice": lambda a: CategoricalDistribution([_optuna_value(v) for v in a]),
+    }
+    distributions = {key: make[kind](args) for key, (kind, args) in space.items()}
+    verbosity = optuna.logging.get_verbosity()
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    try:
+        study = optuna.create_study(direction="maximize")
+        for point, value in finals:
+            params = {key: _optuna_value(_plain(point[key])) for key in distributions}
+            study.add_trial(
+                optuna.trial.create_trial(params=params, distributions=distributions, value=value)
+            )
+        return dict(optuna.importance.get_param_importances(study))
+    finally:
+        optuna.logging.set_verbosity(verbosity)
+
+
+def write_importance(
+    out: Path, space: Mapping[str, tuple[str, list[Any]]], trials: Sequence[sweep.Trial], metric: str
+) -> str:
+    """``importance.json`` (each searched key's importance for the final ``metric``), and the line
+    that says so; a line that says why not where there are too few evaluated trials to tell."""
+    finals = [(trial, last[metric]) for trial, last in _finals(out, trials)]
+    if len(finals) < MIN_IMPORTANCE_TRIALS or len({value for _, value in finals}) < 2:
+        return (
+            f"importance: not computed ({len(finals)} evaluated trials, {len({v for _, v in finals})} "
+            f"distinct values of {metric}; it needs {MIN_IMPORTANCE_TRIALS} and 2)"
+        )
+    found = importance(space, [(trial.point, value) for trial, value in finals])
+    record = {"metric": metric, "trials": len(finals), "importance": found}
+    path = out / IMPORTANCE_FILE
+    write_atomically(
+        path, lambda tmp: Path(tmp).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
+    )
+    ranked = ", ".join(f"{key} {value:.2f}" for key, value in sorted(found.items(), key=lambda kv: -kv[1]))
+    return f"importance for the final {metric} over {len(finals)} trials: {ranked}; wrote {path}"

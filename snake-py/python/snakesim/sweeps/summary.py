@@ -20,6 +20,8 @@ SUMMARY_FILE = "summary.csv"
 #: The success rate a run has learnt the task at (the first evaluation reaching it counts).
 SUCCESS_THRESHOLD = 0.9
 _TO = f"to_{SUCCESS_THRESHOLD:g}"
+#: The derived metric of :func:`with_success_auc`.
+SUCCESS_AUC = "success_auc"
 COLUMNS = (
     "config",
     "grid",
@@ -46,6 +48,20 @@ def evaluations(run_dir: Path) -> list[dict[str, float]]:
         return sorted(read_evaluations(path), key=lambda row: row["timesteps"])
     except (ValueError, OSError):
         return []
+
+
+def with_success_auc(rows: Sequence[dict[str, float]]) -> list[dict[str, float]]:
+    """``rows`` (evaluations in timestep order) with ``success_auc`` added to each: the mean success
+    rate of the evaluations up to and including it. With evaluations every ``eval_freq`` timesteps that
+    is the area under the success curve over the timesteps trained so far, divided by them: 1 for a run
+    that succeeds from its first evaluation on. Unlike the last evaluation's success rate (a handful
+    of episodes, which many configurations end at 1), it tells a run that learnt early from one that
+    learnt late."""
+    out, total = [], 0.0
+    for count, row in enumerate(rows, 1):
+        total += row["success_rate"]
+        out.append({**row, SUCCESS_AUC: total / count})
+    return out
 
 
 def _mean_std(values: Sequence[float]) -> tuple[float | None, float | None]:

@@ -222,6 +222,15 @@ def _last_line(text: str, limit: int = 300) -> str:
 
 
 # -- the trainable (runs on the workers) ----------------------------------------------------------
+def _metrics(history: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """What Tune hears of a run's latest evaluation: its row's METRICS and the derived success_auc
+    (``history``: all the run's evaluations so far, in timestep order)."""
+    from snakesim.sweeps.summary import SUCCESS_AUC, with_success_auc
+
+    last = with_success_auc([dict(r) for r in history])[-1]
+    return {**{key: last.get(key) for key in METRICS}, SUCCESS_AUC: last[SUCCESS_AUC]}
+
+
 class _Reporter:
     """Hands each evaluation of a trial's run to Tune, with a pointer to the run's newest checkpoint
     when there is a new one."""
@@ -255,9 +264,13 @@ class _Reporter:
         from ray import tune
 
         from snakesim.runs import rundir
+        from snakesim.sweeps.summary import evaluations
 
         self.note_session()  # a new run's folder exists from its first evaluation on
-        metrics = {key: row.get(key) for key in METRICS}
+        # The run's earlier evaluations (a resumed trial's included) and this one, whether or not the
+        # trainer has written it to evaluations.csv yet.
+        history = [r for r in evaluations(self.run_dir) if r["timesteps"] < row["timesteps"]]
+        metrics = _metrics([*history, dict(row)])
         metrics["resumed_from"] = self.started_from
         found = rundir.checkpoints(self.run_dir, native=self.native)
         if not found or found[-1][0] <= self.reported_checkpoint:
@@ -294,7 +307,7 @@ def train_trial(param: Mapping[str, Any]) -> None:
 
         rows = read_evaluations(run_dir / EVALUATIONS_FILE)
         if rows:
-            tune.report({key: rows[-1][key] for key in METRICS})
+            tune.report(_metrics(sorted(rows, key=lambda r: r["timesteps"])))
         return
     found = rundir.checkpoints(run_dir, native=native)
     resume = bool(found) and (run_dir / rundir.CONFIG_FILE).is_file()
