@@ -222,6 +222,9 @@ def test_a_search_for_success_auc_on_a_cluster(cluster, tmp_path):
         assert set(rates) == ({1.0} if config["env"]["goal_radius"] > 10.0 else {0.0})
         aucs[run.name] = (sum(rates) / len(rates), len(rates), config["env"]["goal_radius"])
     assert len(aucs) == 6
+    summary = {json.loads(row["grid"])["env.goal_radius"]: row for row in read_csv(out / "summary.csv")}
+    for auc, _, radius in aucs.values():
+        assert float(summary[radius]["final_success_auc_mean"]) == pytest.approx(auc, abs=1e-6)
 
     # best.yaml is the trial with the highest success_auc (more evaluations break ties).
     best = max(aucs, key=lambda name: aucs[name][:2])

@@ -30,6 +30,8 @@ COLUMNS = (
     "final_timesteps_mean",
     "final_success_rate_mean",
     "final_success_rate_std",
+    "final_success_auc_mean",
+    "final_success_auc_std",
     "final_return_mean",
     "final_return_std",
     f"seeds_reaching_{SUCCESS_THRESHOLD:g}",
@@ -83,7 +85,7 @@ def summarize(out: str | os.PathLike, trials: Sequence[Trial]) -> list[dict[str,
     for (config, point), members in groups.items():
         finals, reached = [], []
         for trial in members:
-            history = evaluations(trial.run_dir(out))
+            history = with_success_auc(evaluations(trial.run_dir(out)))
             if not history:
                 continue
             finals.append(history[-1])
@@ -100,6 +102,7 @@ def summarize(out: str | os.PathLike, trials: Sequence[Trial]) -> list[dict[str,
         }
         for name, key, source in (
             ("final_success_rate", "success_rate", finals),
+            ("final_success_auc", SUCCESS_AUC, finals),
             ("final_return", "mean_return", finals),
             (f"timesteps_{_TO}", "timesteps", reached),
             (f"wall_time_{_TO}", "wall_time", reached),
