@@ -173,3 +173,13 @@ def test_the_robot_agent_reaches_its_goals_from_any_directory(tmp_path):
 def test_a_model_is_shipped():
     assert (MODELS / "goal-5.safetensors").is_file()
     assert snakesim.GOAL_ENV_ID == "snakesim/SnakeGoal-v0"
+
+
+def test_the_paper_10_agent_solves_the_papers_10_joint_task():
+    # The paper's own env (Snake-v0: fixed goal 10 m ahead, joint-target actions, snakebot-gym masses),
+    # which neither of the paper's published 10-joint agents ever solved (docs/experiments.md).
+    model = MODELS / "paper-10.safetensors"
+    env = env_kwargs_of(model)
+    assert "task" not in env and env["joints"] == 10 and env["preset"] == "snakebot-gym", env
+    report = _evaluate(str(model), "--episodes", "4", "--seed", "777000")
+    assert report["success_rate"] == 1.0, report

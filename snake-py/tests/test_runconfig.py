@@ -51,6 +51,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "paper-large-5",
         "paper-small-10",
         "paper-small-5",
+        "paper-tuned-10",
         "paper-tuned-5",
         "pegs-10",
         "rough-10-blind",
@@ -71,14 +72,26 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         assert config["n_envs"] == (32 if name == "paper-large-10" else 16)
 
 
+# Each shipped agent's model file, by the config that trained it (the same name, or as listed here).
+AGENT_OF_CONFIG = {"paper-tuned-10": "paper-10"}
+
+
 @pytest.mark.parametrize(
-    "path", [p for p in CONFIGS if (MODELS / f"{p.stem}.safetensors").is_file()], ids=lambda p: p.stem
+    "path",
+    [p for p in CONFIGS if (MODELS / f"{AGENT_OF_CONFIG.get(p.stem, p.stem)}.safetensors").is_file()],
+    ids=lambda p: p.stem,
 )
 def test_a_shipped_agents_config_trains_in_the_env_its_model_records(path):
     # The model's metadata is what snake-rl wrote at the end of the training that the config ran.
     config = runconfig.load(path)
-    assert runconfig.env_kwargs(config) == env_kwargs_of(MODELS / f"{path.stem}.safetensors")
+    model = MODELS / f"{AGENT_OF_CONFIG.get(path.stem, path.stem)}.safetensors"
+    assert runconfig.env_kwargs(config) == env_kwargs_of(model)
     assert config["trainer"] == "native"
+
+
+def test_every_shipped_agent_has_its_config():
+    trained = {AGENT_OF_CONFIG.get(p.stem, p.stem) for p in CONFIGS}
+    assert sorted(p.stem for p in MODELS.glob("*.safetensors") if p.stem not in trained) == []
 
 
 @pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.name)
