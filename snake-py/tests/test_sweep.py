@@ -402,3 +402,18 @@ def test_an_unreachable_address_is_one_line_within_the_timeout(tmp_path):
     assert done.stderr.strip().splitlines()[-1] == (
         f"snakesim.sweeps.plan.SweepError: no Ray cluster answered at {address} within 3 s"
     )
+
+
+def test_the_shipped_search_space_fits_the_config_it_searches():
+    # snake-py/configs/spaces/paper-5.yaml, with the base config and --set of docs/experiments.md's
+    # search: every end of a range and every choice is a valid value, and every pairing of rollout
+    # shape and minibatch size fits (the smallest rollout holds the largest minibatch).
+    from snakesim.sweeps import plan, search
+
+    configs = Path(__file__).resolve().parents[1] / "configs"
+    sets = ["seed=100", "timesteps=786432", "eval_freq=65536"]
+    ((_, base),) = plan.load_configs([configs / "paper-tuned-5.yaml"], sets).items()
+    space = search.load_space(configs / "spaces" / "paper-5.yaml", base)
+    assert len(space) == 12 and not any(key.startswith("env") for key in space)
+    rollout = min(space["ppo.n_steps"][1]) * min(space["n_envs"][1])
+    assert max(space["ppo.batch_size"][1]) <= rollout
