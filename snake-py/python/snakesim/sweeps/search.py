@@ -348,7 +348,10 @@ def write_importance(
             f"importance: not computed ({len(finals)} evaluated trials, {len({v for _, v in finals})} "
             f"distinct values of {metric}; it needs {MIN_IMPORTANCE_TRIALS} and 2)"
         )
-    found = importance(space, [(trial.point, value) for trial, value in finals])
+    try:
+        found = importance(space, [(trial.point, value) for trial, value in finals])
+    except (ValueError, RuntimeError) as error:  # e.g. a saved value Optuna does not take as its choice
+        return f"importance: not computed ({error})"
     record = {"metric": metric, "trials": len(finals), "importance": found}
     path = out / IMPORTANCE_FILE
     write_atomically(
