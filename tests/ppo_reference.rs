@@ -13,7 +13,7 @@ use rand_chacha::ChaCha12Rng;
 use serde::Serialize;
 use serde_json::{json, Value};
 use snake_rl::buffer::RolloutBuffer;
-use snake_rl::nn::{init_params, ActorCritic, Arch, Workspace};
+use snake_rl::nn::{init_params, ActorCritic, Arch, NetArch, Workspace};
 use snake_rl::normalize::Normalizer;
 use snake_rl::optim::Adam;
 use snake_rl::ppo::loss::{gaussian_entropy, gaussian_log_prob};
@@ -166,7 +166,7 @@ fn ppo_spec(c: &PpoCase) -> Value {
         })
         .collect();
     json!({
-        "kind": "ppo", "name": c.name, "arch": c.net.arch().name(),
+        "kind": "ppo", "name": c.name, "arch": c.net.arch(),
         "obs_dim": c.net.obs_dim(), "act_dim": c.net.act_dim(), "rows": c.rows,
         "tensors": tensors, "obs": c.obs, "actions": c.actions, "old_log_prob": c.old_log_prob,
         "advantages": c.advantages, "returns": c.returns, "old_values": c.old_values,
@@ -343,6 +343,38 @@ fn ppo_update_matches_sb3() {
             2,
         ),
         ppo_case("large-5", Arch::Large, 12, 5, 64, default(), 3),
+        // Widths of one's own (`arch: {shared, pi, vf}`): deeper, narrower and uneven heads, with and
+        // without a trunk; SB3 builds them from the same mapping (`policy_kwargs`).
+        ppo_case(
+            "custom-heads-5",
+            Arch::Custom(NetArch {
+                shared: vec![],
+                pi: vec![32, 16, 8],
+                vf: vec![48],
+            }),
+            12,
+            5,
+            64,
+            default(),
+            5,
+        ),
+        ppo_case(
+            "custom-trunk-10",
+            Arch::Custom(NetArch {
+                shared: vec![40],
+                pi: vec![24],
+                vf: vec![24, 12],
+            }),
+            22,
+            10,
+            64,
+            Settings {
+                ent_coef: 0.01,
+                max_grad_norm: 0.5,
+                ..default()
+            },
+            6,
+        ),
         ppo_case(
             "large-10-odd-rows",
             Arch::Large,

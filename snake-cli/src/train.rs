@@ -164,7 +164,7 @@ pub fn run(args: &TrainArgs, matches: &clap::ArgMatches) -> Result<ExitCode> {
         let (_, saved) = snake_rl::rundir::RunDir::open(&run_dir)?;
         let mut base = serde_json::to_value(saved).expect("serialises");
         for layer in &layers {
-            config::merge(&mut base, layer);
+            config::merge_layer(&mut base, layer);
         }
         (RunConfig::from_layers(&[base])?, run_dir)
     } else {
@@ -193,7 +193,7 @@ pub fn run(args: &TrainArgs, matches: &clap::ArgMatches) -> Result<ExitCode> {
     say!(
         "run {}: PPO-{}, {body}, {} timesteps, {} envs, seed {}{}",
         run_dir.display(),
-        resolved.arch,
+        &resolved.arch,
         resolved.timesteps,
         resolved.n_envs,
         resolved.seed,

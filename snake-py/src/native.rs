@@ -26,6 +26,17 @@ fn json_value(text: &str, what: &str) -> PyResult<Value> {
         .map_err(|e| PyValueError::new_err(format!("{what} is not JSON: {e}")))
 }
 
+/// A configuration's `arch` (JSON: a name or a mapping of widths) in words, as a run names it.
+#[pyfunction]
+fn arch_label(arch: &str) -> PyResult<String> {
+    let arch: snake_rl::nn::Arch = config::from_value(
+        serde_json::from_str(arch).map_err(|e| PyValueError::new_err(format!("arch: {e}")))?,
+        "arch",
+    )
+    .map_err(|e| PyValueError::new_err(e.0))?;
+    Ok(arch.to_string())
+}
+
 /// The defaults of a run configuration, as JSON.
 #[pyfunction]
 fn run_config_defaults() -> String {
@@ -59,7 +70,7 @@ fn resolve_run_config(layers: Vec<String>) -> PyResult<String> {
 fn merge_layers(layers: Vec<String>) -> PyResult<String> {
     let mut out = Value::Object(serde_json::Map::new());
     for l in &layers {
-        config::merge(&mut out, &json_value(l, "a configuration layer")?);
+        config::merge_layer(&mut out, &json_value(l, "a configuration layer")?);
     }
     Ok(out.to_string())
 }
@@ -121,9 +132,17 @@ impl NativePolicy {
         &self.path
     }
 
+    /// `small`, `large`, or the widths in words (`pi [256, 256], vf [256, 256]`).
     #[getter]
-    fn arch(&self) -> &'static str {
-        self.saved.net.arch().name()
+    fn arch(&self) -> String {
+        self.saved.net.arch().to_string()
+    }
+
+    /// The widths of the network's tanh layers: `{"shared": [...], "pi": [...], "vf": [...]}`.
+    #[getter]
+    fn net_arch(&self) -> std::collections::BTreeMap<&'static str, Vec<usize>> {
+        let net = self.saved.net.arch().net();
+        [("shared", net.shared), ("pi", net.pi), ("vf", net.vf)].into()
     }
 
     #[getter]
@@ -498,6 +517,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(env_throughput, m)?)?;
     m.add_function(wrap_pyfunction!(run_config_flags, m)?)?;
     m.add_function(wrap_pyfunction!(default_run_dir, m)?)?;
+    m.add_function(wrap_pyfunction!(arch_label, m)?)?;
     m.add_class::<NativePolicy>()?;
     m.add("IDENTITY_KEYS", snake_rl::config::IDENTITY_KEYS.to_vec())?;
     m.add(
@@ -538,6 +558,9 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("eval_episodes", run::MAX_EVAL_EPISODES)?;
     d.set_item("threads", run::MAX_THREADS)?;
     d.set_item("seed", run::MAX_SEED)?;
+    d.set_item("net_layers", run::MAX_NET_LAYERS)?;
+    d.set_item("net_width", run::MAX_NET_WIDTH)?;
+    d.set_item("log_std_init", run::LOG_STD_INIT.to_vec())?;
     d.set_item("bench_seconds", run::MAX_BENCH_SECONDS)?;
     d.set_item("space_size", core::MAX_SPACE_SIZE)?;
     d.set_item("replay_frames", core::MAX_REPLAY_FRAMES)?;

@@ -286,3 +286,48 @@ def test_environment_variables_do_not_leak(monkeypatch):
     monkeypatch.setenv("RAYON_NUM_THREADS", "1")
     assert runconfig.validate({"threads": 2})["threads"] == 2
     assert os.environ["RAYON_NUM_THREADS"] == "1"
+
+
+def test_widths_and_log_std_init_of_ones_own(tmp_path, capsys):
+    """``arch`` as SB3's net_arch (with a trunk) and ``log_std_init``: the native run builds, saves and
+    loads that network, SB3 builds the same one from the same config, and the export acts alike."""
+    from snakesim.runs.policies import policy_kwargs
+    from stable_baselines3 import PPO
+
+    arch = {"shared": [24], "pi": [32, 16], "vf": [8]}
+    # A learning rate so small that training leaves log_std where it started (Adam moves a parameter
+    # by about the learning rate per step): what remains is the initialisation.
+    config = {**TINY, "arch": arch, "log_std_init": -0.7, "ppo": {**TINY["ppo"], "learning_rate": 1e-12}}
+    run_dir = tmp_path / "run"
+    code = cli.main(
+        [
+            "train",
+            "--config",
+            str(write_yaml(tmp_path / "c.yaml", config)),
+            "--run-dir",
+            str(run_dir),
+            "--no-progress",
+        ]
+    )
+    assert code == 0
+    assert runconfig.load(run_dir / "config.yaml")["arch"] == arch
+    agent = agents.load_agent(run_dir)
+    assert agent.arch == "shared [24], pi [32, 16], vf [8]" and agent.policy.net_arch == arch
+    tensors = agent.policy.tensors()
+    np.testing.assert_allclose(tensors["log_std"], -0.7, atol=1e-6)
+    # SB3 (the reference) builds the same tensors from the same keys.
+    env_kwargs = runconfig.env_kwargs(runconfig.load(run_dir / "config.yaml"))
+    from snakesim.envs.sb3 import SnakeVecEnv
+
+    sb3 = PPO("MlpPolicy", SnakeVecEnv(1, **env_kwargs), policy_kwargs=policy_kwargs(arch, log_std_init=-0.7))
+    state = sb3.policy.state_dict()
+    assert {k: list(v.shape) for k, v in state.items() if not k.startswith(("pi_", "vf_"))} == {
+        k: list(np.shape(v)) for k, v in tensors.items()
+    }
+    np.testing.assert_array_equal(state["log_std"].numpy(), np.full(3, -0.7, np.float32))
+    out = tmp_path / "exported.zip"
+    code, stdout, _ = run_cli(capsys, "export", run_dir, "--sb3", out)
+    assert code == 0 and "PPO-shared [24], pi [32, 16], vf [8]" in stdout
+    obs = _observations(agent.env_kwargs)
+    theirs, _ = PPO.load(out, device="cpu").predict(obs, deterministic=True)
+    _assert_same_actions(agent.act(obs, deterministic=True), theirs)

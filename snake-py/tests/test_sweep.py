@@ -19,6 +19,7 @@ import pytest
 import yaml
 from PIL import Image
 from snakesim.cli import app as cli
+from snakesim.runs import config as runconfig
 from snakesim.sweeps.plan import CONNECT_TIMEOUT_S
 from snakesim.sweeps.summary import SUCCESS_THRESHOLD
 
@@ -417,3 +418,28 @@ def test_the_shipped_search_space_fits_the_config_it_searches():
     assert len(space) == 12 and not any(key.startswith("env") for key in space)
     rollout = min(space["ppo.n_steps"][1]) * min(space["n_envs"][1])
     assert max(space["ppo.batch_size"][1]) <= rollout
+
+
+def test_a_search_varies_the_networks_widths_and_log_std_init(tmp_path):
+    # arch.pi / arch.vf / arch.shared take lists of widths; a part the trial leaves alone keeps the base
+    # network's widths (large keeps its trunk).
+    from snakesim.sweeps import search
+
+    space_file = tmp_path / "space.yaml"
+    space_file.write_text(
+        "arch.pi: {choice: [[64, 64], [256, 256], [128, 128, 128]]}\n"
+        "arch.vf: {choice: [[64], [256, 256]]}\n"
+        "log_std_init: {uniform: [-1.5, 0.0]}\n"
+    )
+    base = {"arch": "large"}
+    space = search.load_space(space_file, base)
+    assert space["arch.pi"] == ("choice", [[64, 64], [256, 256], [128, 128, 128]])
+    trial = search._overrides(base, {"arch.pi": [256, 256], "log_std_init": -0.5})
+    resolved = runconfig.resolve(trial)
+    assert resolved["arch"] == {"shared": [128, 128], "pi": [256, 256], "vf": [64, 64]}
+    assert resolved["log_std_init"] == -0.5
+    space_file.write_text("arch.pi: {choice: [[64], []]}\n")
+    with pytest.raises(
+        runconfig.ConfigError, match=r"arch.pi = \[\]: arch.pi: must have 1 to 8 layers, got 0"
+    ):
+        search.load_space(space_file, base)

@@ -122,7 +122,7 @@ fn run(iters: usize) -> AnyResult<bool> {
     );
 
     let mut agree = true;
-    for &(arch, obs_dim, act_dim) in &SHAPES {
+    for (arch, obs_dim, act_dim) in SHAPES {
         agree &= check(arch, obs_dim, act_dim)?;
     }
     if !agree {
@@ -139,8 +139,8 @@ fn run(iters: usize) -> AnyResult<bool> {
         "shape", "params", "hand-written us", "candle us", "ratio"
     );
     let mut phases = Vec::new();
-    for &(arch, obs_dim, act_dim) in &SHAPES {
-        let name = shape_name(arch, obs_dim, act_dim);
+    for (arch, obs_dim, act_dim) in SHAPES {
+        let name = shape_name(&arch, obs_dim, act_dim);
         let (net, params, data) = setup(arch, obs_dim, act_dim);
         let len = net.len();
         let mut hand = HandWritten::new(net.clone(), params.clone());
@@ -174,8 +174,8 @@ fn run(iters: usize) -> AnyResult<bool> {
     Ok(true)
 }
 
-fn shape_name(arch: Arch, obs_dim: usize, act_dim: usize) -> String {
-    format!("{:5} obs {obs_dim:2} act {act_dim:2}", arch.name())
+fn shape_name(arch: &Arch, obs_dim: usize, act_dim: usize) -> String {
+    format!("{:5} obs {obs_dim:2} act {act_dim:2}", arch.to_string())
 }
 
 /// `iters` calls of `step` after `WARM_UP` untimed ones; microseconds per call of each phase.
@@ -362,10 +362,9 @@ impl Candle {
                 .collect::<candle_core::Result<Vec<_>>>()
         };
         let arch = net.arch();
-        let heads = arch.head_widths().len();
         let shared = chain("features_extractor.shared_net", arch.shared_widths().len())?;
-        let pi = chain("mlp_extractor.policy_net", heads)?;
-        let vf = chain("mlp_extractor.value_net", heads)?;
+        let pi = chain("mlp_extractor.policy_net", arch.pi_widths().len())?;
+        let vf = chain("mlp_extractor.value_net", arch.vf_widths().len())?;
         let action = linear("action_net")?;
         let value = linear("value_net")?;
         let log_std = var("log_std")?;

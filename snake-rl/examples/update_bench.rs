@@ -25,7 +25,7 @@ fn main() {
         (Arch::Large, 12, 5),
         (Arch::Small, 22, 10),
     ] {
-        let net = ActorCritic::new(arch, obs_dim, act_dim);
+        let net = ActorCritic::new(arch.clone(), obs_dim, act_dim);
         let mut rng = rand_chacha::ChaCha12Rng::seed_from_u64(0);
         let mut params = init_params(&net, &mut rng);
         let obs: Vec<f32> = (0..rows * obs_dim)
@@ -99,7 +99,7 @@ fn main() {
 /// One full update of the paper's settings over a random rollout, on `threads` threads; seconds.
 fn full_update(arch: Arch, obs_dim: usize, act_dim: usize, threads: usize) -> f64 {
     let (n_steps, n_envs) = (4096, 16);
-    let net = ActorCritic::new(arch, obs_dim, act_dim);
+    let net = ActorCritic::new(arch.clone(), obs_dim, act_dim);
     let mut rng = rand_chacha::ChaCha12Rng::seed_from_u64(1);
     let params = init_params(&net, &mut rng);
     let mut buffer = RolloutBuffer::new(n_steps, n_envs, obs_dim, act_dim);
@@ -147,8 +147,8 @@ fn full_updates() {
         (Arch::Large, 12, 5),
         (Arch::Small, 22, 10),
     ] {
-        let t1 = full_update(arch, obs_dim, act_dim, 1);
-        let t2 = full_update(arch, obs_dim, act_dim, 2);
+        let t1 = full_update(arch.clone(), obs_dim, act_dim, 1);
+        let t2 = full_update(arch.clone(), obs_dim, act_dim, 2);
         println!(
             "{arch:5} obs {obs_dim:2} act {act_dim:2}: full update (10,240 minibatches) {t1:.2} s on 1 thread, {t2:.2} s on 2 \
              ({:.1} / {:.1} us per minibatch)",

@@ -64,6 +64,13 @@ pub mod limits {
     pub const MAX_SEARCH_KEYS: u64 = 100;
     /// Longest name of a sweep trial's folder, characters (a config name and its grid point).
     pub const MAX_TRIAL_NAME: u64 = 100;
+    /// Most tanh layers of one part of a network (`arch.shared`, `arch.pi`, `arch.vf`).
+    pub const MAX_NET_LAYERS: u64 = crate::nn::MAX_LAYERS as u64;
+    /// Widest tanh layer of a network.
+    pub const MAX_NET_WIDTH: u64 = crate::nn::MAX_WIDTH as u64;
+    /// Bounds of `log_std_init`: SB3's own bounds of a learnt log standard deviation (SAC's
+    /// `LOG_STD_MIN`, `LOG_STD_MAX`), beyond which the noise is 0 or swamps the action.
+    pub const LOG_STD_INIT: [f64; 2] = [-20.0, 2.0];
     /// Most joint counts one `snake-cli bench` measures.
     pub const MAX_BENCH_SIZES: usize = 16;
     /// Most runs per joint count of `snake-cli bench`.
@@ -264,8 +271,12 @@ pub struct RunConfig {
     /// Joints N of the snake (5).
     #[serde(deserialize_with = "integer::deserialize")]
     pub joints: usize,
-    /// `small` (pi/vf [64, 64]) or `large` (shared [128, 128] first).
+    /// `small` (pi/vf [64, 64]), `large` (shared [128, 128] first), or the widths of each part, as
+    /// SB3's `net_arch` with a shared trunk: `{shared: [], pi: [256, 256], vf: [256, 256]}` (a part left
+    /// out takes small's widths).
     pub arch: Arch,
+    /// The initial log standard deviation of every action's noise, as SB3's `log_std_init` (0.0).
+    pub log_std_init: f64,
     /// The robot's masses: `paper` (every cube 0.06 kg) or `snakebot-gym` (links 1 kg).
     pub preset: Preset,
     /// Total env steps to train for (20,000,000).
@@ -316,6 +327,7 @@ impl Default for RunConfig {
             trainer: TrainerKind::Native,
             joints: 5,
             arch: Arch::Small,
+            log_std_init: 0.0,
             preset: Preset::Paper,
             timesteps: 20_000_000,
             n_envs: 16,
@@ -340,6 +352,7 @@ pub const IDENTITY_KEYS: &[&str] = &[
     "trainer",
     "joints",
     "arch",
+    "log_std_init",
     "preset",
     "n_envs",
     "seed",
@@ -352,6 +365,20 @@ pub const IDENTITY_KEYS: &[&str] = &[
 
 /// Offset of the default evaluation seed from the training seed.
 pub const EVAL_SEED_OFFSET: u64 = 1000;
+
+/// A configuration `base` updated by the layer `overlay`, as [`merge`] does, except that widths given
+/// for some parts of the network (`arch: {pi: [256, 256]}`) replace those parts of the network `base`
+/// names (`large` keeps its trunk), not the whole network.
+pub fn merge_layer(base: &mut Value, overlay: &Value) {
+    if let (Some(Value::String(name)), Some(Value::Object(_))) =
+        (base.get("arch"), overlay.get("arch"))
+    {
+        if let Ok(named) = name.parse::<Arch>() {
+            base["arch"] = serde_json::to_value(named.net()).expect("widths serialise");
+        }
+    }
+    merge(base, overlay);
+}
 
 /// `base` updated by `overlay`: mappings merge key by key at every depth, anything else replaces.
 pub fn merge(base: &mut Value, overlay: &Value) {
@@ -614,7 +641,7 @@ impl RunConfig {
                     kind(layer)
                 )));
             }
-            merge(&mut merged, layer);
+            merge_layer(&mut merged, layer);
         }
         let config: RunConfig = from_value(merged, "")?;
         config.validate()?;
@@ -636,6 +663,14 @@ impl RunConfig {
             snake_core::config::MAX_JOINTS as u64,
         )?;
         check_range("timesteps", self.timesteps, 1, MAX_TIMESTEPS)?;
+        self.arch.check().map_err(err)?;
+        check_real("log_std_init", self.log_std_init, false)?;
+        check_range(
+            "log_std_init",
+            self.log_std_init,
+            LOG_STD_INIT[0],
+            LOG_STD_INIT[1],
+        )?;
         check_range("n_envs", self.n_envs as u64, 1, MAX_ENVS)?;
         check_range("seed", self.seed, 0, MAX_SEED)?;
         if let Some(s) = self.eval_seed {
@@ -817,6 +852,42 @@ mod tests {
     }
 
     #[test]
+    fn arch_takes_widths_as_sb3_net_arch() {
+        use crate::nn::NetArch;
+        let c =
+            RunConfig::from_yaml("arch: {pi: [256, 256], vf: [128]}\nlog_std_init: -0.5").unwrap();
+        let net = NetArch {
+            shared: vec![],
+            pi: vec![256, 256],
+            vf: vec![128],
+        };
+        assert_eq!(c.arch, Arch::Custom(net));
+        assert_eq!(c.log_std_init, -0.5);
+        assert_eq!(c.arch.to_string(), "pi [256, 256], vf [128]");
+        assert_eq!(RunConfig::from_yaml(&c.to_yaml()).unwrap(), c);
+        assert_eq!(c.arch.to_meta().parse::<Arch>().unwrap(), c.arch);
+        // The paper's widths are the paper's networks, by name.
+        let large = "arch: {shared: [128, 128], pi: [64, 64], vf: [64, 64]}";
+        assert_eq!(RunConfig::from_yaml(large).unwrap().arch, Arch::Large);
+        assert_eq!(RunConfig::from_yaml("arch: {}").unwrap().arch, Arch::Small);
+        assert_eq!(Arch::Large.to_meta(), "large");
+        // Widths of some parts over a named network change those parts only.
+        let layers = [
+            serde_json::json!({"arch": "large"}),
+            serde_json::json!({"arch": {"pi": [256]}}),
+        ];
+        let c = RunConfig::from_layers(&layers).unwrap();
+        assert_eq!(
+            c.arch.net(),
+            NetArch {
+                shared: vec![128, 128],
+                pi: vec![256],
+                vf: vec![64, 64]
+            }
+        );
+    }
+
+    #[test]
     fn errors_name_the_key_path() {
         assert!(error("bogus: 1").starts_with("bogus: unknown field `bogus`, expected one of"));
         assert!(error("ppo: {n_stepz: 1}").starts_with("ppo.n_stepz: unknown field `n_stepz`"));
@@ -834,6 +905,15 @@ mod tests {
             .starts_with("n_envs: invalid value: integer `-1`, expected a non-negative integer"));
         assert!(error("seed: 4294967296").starts_with("seed: must be in [0, 4294967295]"));
         assert!(error("arch: huge").starts_with("arch: unknown variant `huge`"));
+        assert!(error("arch: {pi: []}").starts_with("arch.pi: must have 1 to 8 layers, got 0"));
+        assert!(error("arch: {shared: [64, 0]}")
+            .starts_with("arch.shared: layer widths must be in [1, 4096], got 0"));
+        assert!(error("arch: {vf: [1, 1, 1, 1, 1, 1, 1, 1, 1]}")
+            .starts_with("arch.vf: must have 1 to 8 layers, got 9"));
+        assert!(error("arch: {heads: [64]}").starts_with("arch.heads: unknown field `heads`"));
+        assert!(error("arch: {pi: [-1]}").starts_with("arch.pi[0]: invalid value"));
+        assert!(error("arch: 3").starts_with("arch: invalid type: integer `3`"));
+        assert!(error("log_std_init: 3").starts_with("log_std_init: must be in [-20, 2], got 3"));
         assert!(error("env: {reward: {progress_weight: a}}")
             .starts_with("env.reward.progress_weight: invalid type"));
         assert!(

@@ -84,7 +84,8 @@ pub const FLAGS: &[Flag] = &[
     flag(
         "arch",
         FlagValue::Choice(archs),
-        "Network: small (pi/vf [64, 64]) or large (shared [128, 128] first)",
+        "Network: small (pi/vf [64, 64]) or large (shared [128, 128] first); other widths: \
+         --set arch.pi=[256,256] (and arch.vf, arch.shared)",
     ),
     flag("preset", FlagValue::Choice(presets), "Robot preset"),
     flag("timesteps", at_least(1), "Total timesteps"),
@@ -197,7 +198,10 @@ pub fn parse_integer(text: &str, min: u64, max: Option<u64>) -> Result<u64, Stri
 pub fn default_run_dir(config: &RunConfig) -> PathBuf {
     PathBuf::from("runs").join(format!(
         "ppo-{}-{}-{}-seed{}",
-        config.arch, config.joints, config.preset, config.seed
+        config.arch.name().unwrap_or("custom"),
+        config.joints,
+        config.preset,
+        config.seed
     ))
 }
 

@@ -8,7 +8,7 @@
 //! |---|---|
 //! | `format` | `snakesim-ppo` |
 //! | `format_version` | `1` |
-//! | `arch` | `small` or `large` |
+//! | `arch` | `small`, `large`, or the widths as JSON (`{"shared":[],"pi":[256,256],"vf":[256,256]}`) |
 //! | `obs_dim`, `act_dim` | observation and action lengths |
 //! | `joints`, `preset` | the snake |
 //! | `env` | the run's env keywords (JSON), as `snakesim.SnakeEnv` takes them |
@@ -153,7 +153,7 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
     let mut meta: HashMap<String, String> = [
         ("format", FORMAT.to_owned()),
         ("format_version", FORMAT_VERSION.to_owned()),
-        ("arch", p.net.arch().name().to_owned()),
+        ("arch", p.net.arch().to_meta()),
         ("obs_dim", p.net.obs_dim().to_string()),
         ("act_dim", p.net.act_dim().to_string()),
         ("joints", p.env.joints.to_string()),

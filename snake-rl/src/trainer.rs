@@ -392,7 +392,7 @@ impl Run {
     ) -> Result<Self, TrainError> {
         let env_config = config.env_config().map_err(|e| TrainError::Setup(e.0))?;
         let (obs_dim, act_dim) = (env_config.observation_dim(), env_config.action_dim());
-        let net = ActorCritic::new(config.arch, obs_dim, act_dim);
+        let net = ActorCritic::new(config.arch.clone(), obs_dim, act_dim);
         let tb = EventWriter::create(&dir.tensorboard_dir()).map_err(|e| {
             TrainError::Io(format!(
                 "cannot write TensorBoard logs in {}: {e}",
@@ -426,7 +426,9 @@ impl Run {
             }
             None => {
                 let mut rng = ChaCha12Rng::seed_from_u64(config.seed);
-                let params = init_params(&net, &mut rng);
+                let mut params = init_params(&net, &mut rng);
+                let o = net.log_std_offset();
+                params[o..o + act_dim].fill(config.log_std_init as f32);
                 let normalizer = config
                     .normalize
                     .then(|| Normalizer::new(obs_dim, config.n_envs, config.ppo.gamma));

@@ -7,4 +7,4 @@ pub mod network;
 
 pub use dense::Dense;
 pub use init::init_params;
-pub use network::{ActorCritic, Arch, Role, Tensor, Workspace};
+pub use network::{ActorCritic, Arch, NetArch, Role, Tensor, Workspace, MAX_LAYERS, MAX_WIDTH};

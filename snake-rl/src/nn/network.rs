@@ -8,65 +8,222 @@
 //! - [`Arch::Large`] (PPO-large, the paper's `net_arch=[128, 128, dict(pi=[64, 64], vf=[64, 64])]`):
 //!   a shared trunk of two tanh layers of 128 (`features_extractor.shared_net.{0,2}`, as snakesim's
 //!   SB3 features extractor names it), then the same [64, 64] heads.
+//! - [`Arch::Custom`]: any widths ([`NetArch`]: a trunk, then a policy and a value head of at least
+//!   one layer each), named the same way.
 
 use serde::{Deserialize, Serialize};
 
 use super::activation::{tanh_backward_in_place, tanh_in_place};
 use super::dense::Dense;
 
-/// Which of the paper's two networks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+/// Most tanh layers of one part of a network (the shared trunk, the policy or the value head).
+pub const MAX_LAYERS: usize = 8;
+/// Widest tanh layer.
+pub const MAX_WIDTH: usize = 4096;
+
+/// The widths of a network's tanh layers, as SB3's `net_arch` gives them, with the paper's shared trunk
+/// in front: `shared` feeds both heads (empty: none), then `pi` (the policy) and `vf` (the value
+/// function) each have layers of their own. A key left out takes PPO-small's value.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NetArch {
+    /// Layers shared by the policy and the value function (PPO-large: [128, 128]).
+    pub shared: Vec<usize>,
+    /// The policy's own layers ([64, 64]).
+    pub pi: Vec<usize>,
+    /// The value function's own layers ([64, 64]).
+    pub vf: Vec<usize>,
+}
+
+impl Default for NetArch {
+    fn default() -> Self {
+        Arch::Small.net()
+    }
+}
+
+impl NetArch {
+    /// Checks every part's depth and widths; the error names the part (`arch.pi: ...`).
+    pub fn check(&self) -> Result<(), String> {
+        for (part, widths, least) in [
+            ("shared", &self.shared, 0),
+            ("pi", &self.pi, 1),
+            ("vf", &self.vf, 1),
+        ] {
+            if widths.len() < least || widths.len() > MAX_LAYERS {
+                return Err(format!(
+                    "arch.{part}: must have {least} to {MAX_LAYERS} layers, got {}",
+                    widths.len()
+                ));
+            }
+            if let Some(w) = widths.iter().find(|w| !(1..=MAX_WIDTH).contains(*w)) {
+                return Err(format!(
+                    "arch.{part}: layer widths must be in [1, {MAX_WIDTH}], got {w}"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which network: one of the paper's two by name, or any [`NetArch`] (a mapping in a configuration).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Default)]
 pub enum Arch {
     /// Separate policy and value networks of [64, 64] (tanh).
     #[default]
     Small,
     /// A shared [128, 128] tanh trunk, then policy and value heads of [64, 64].
     Large,
+    /// Any other widths (one equal to a named network is that network).
+    Custom(NetArch),
 }
 
+const HEADS: &[usize] = &[64, 64];
+const LARGE_TRUNK: &[usize] = &[128, 128];
+
 impl Arch {
-    /// Every architecture, in the order of their names in [`Arch::NAMES`].
+    /// The named architectures, in the order of their names in [`Arch::NAMES`].
     pub const ALL: [Arch; 2] = [Arch::Small, Arch::Large];
     /// The configuration names.
     pub const NAMES: [&'static str; 2] = ["small", "large"];
 
-    /// The configuration name (`small` or `large`).
-    pub fn name(self) -> &'static str {
+    /// The network of `net`: a named one where the widths are its widths.
+    pub fn from_net(net: NetArch) -> Self {
+        Arch::ALL
+            .into_iter()
+            .find(|a| {
+                a.shared_widths() == net.shared
+                    && a.pi_widths() == net.pi
+                    && a.vf_widths() == net.vf
+            })
+            .unwrap_or(Arch::Custom(net))
+    }
+
+    /// The configuration name: `small`, `large`, or None for a custom network.
+    pub fn name(&self) -> Option<&'static str> {
         match self {
-            Arch::Small => "small",
-            Arch::Large => "large",
+            Arch::Small => Some("small"),
+            Arch::Large => Some("large"),
+            Arch::Custom(_) => None,
+        }
+    }
+
+    /// Its widths.
+    pub fn net(&self) -> NetArch {
+        NetArch {
+            shared: self.shared_widths().to_vec(),
+            pi: self.pi_widths().to_vec(),
+            vf: self.vf_widths().to_vec(),
         }
     }
 
     /// Widths of the shared trunk's tanh layers.
-    pub fn shared_widths(self) -> &'static [usize] {
+    pub fn shared_widths(&self) -> &[usize] {
         match self {
             Arch::Small => &[],
-            Arch::Large => &[128, 128],
+            Arch::Large => LARGE_TRUNK,
+            Arch::Custom(n) => &n.shared,
         }
     }
 
-    /// Widths of each head's tanh layers (policy and value alike).
-    pub fn head_widths(self) -> &'static [usize] {
-        &[64, 64]
+    /// Widths of the policy head's tanh layers.
+    pub fn pi_widths(&self) -> &[usize] {
+        match self {
+            Arch::Small | Arch::Large => HEADS,
+            Arch::Custom(n) => &n.pi,
+        }
+    }
+
+    /// Widths of the value head's tanh layers.
+    pub fn vf_widths(&self) -> &[usize] {
+        match self {
+            Arch::Small | Arch::Large => HEADS,
+            Arch::Custom(n) => &n.vf,
+        }
+    }
+
+    /// Checks a custom network's widths (the named ones are fine).
+    pub fn check(&self) -> Result<(), String> {
+        match self {
+            Arch::Custom(n) => n.check(),
+            _ => Ok(()),
+        }
+    }
+
+    /// As a model file's metadata holds it: the name, or the widths as a JSON mapping.
+    pub fn to_meta(&self) -> String {
+        match (self.name(), self) {
+            (Some(name), _) => name.to_owned(),
+            (None, Arch::Custom(n)) => serde_json::to_string(n).expect("widths serialise"),
+            (None, _) => unreachable!("every named architecture has a name"),
+        }
     }
 }
 
+/// `small`, `large`, or the widths (`shared [32], pi [256, 256], vf [256, 256]`).
 impl std::fmt::Display for Arch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+        if let Some(name) = self.name() {
+            return f.write_str(name);
+        }
+        if !self.shared_widths().is_empty() {
+            write!(f, "shared {:?}, ", self.shared_widths())?;
+        }
+        write!(f, "pi {:?}, vf {:?}", self.pi_widths(), self.vf_widths())
     }
 }
 
+/// A name, or (as [`Arch::to_meta`] writes it) the widths as a JSON mapping.
 impl std::str::FromStr for Arch {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        Arch::ALL
-            .into_iter()
-            .find(|a| a.name() == s)
-            .ok_or_else(|| format!("unknown arch '{s}' (expected one of: small, large)"))
+        if let Some(a) = Arch::ALL.into_iter().find(|a| a.name() == Some(s)) {
+            return Ok(a);
+        }
+        if s.trim_start().starts_with('{') {
+            let net: NetArch =
+                serde_json::from_str(s).map_err(|e| format!("arch: bad widths {s} ({e})"))?;
+            net.check()?;
+            return Ok(Arch::from_net(net));
+        }
+        Err(format!(
+            "unknown arch '{s}' (expected small, large or a mapping of widths {{shared, pi, vf}})"
+        ))
+    }
+}
+
+impl Serialize for Arch {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Arch::Custom(n) => n.serialize(s),
+            named => s.serialize_str(named.name().expect("named")),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Arch {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Arch;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("small, large, or a mapping of layer widths {shared, pi, vf}")
+            }
+
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<Arch, E> {
+                Arch::ALL
+                    .into_iter()
+                    .find(|a| a.name() == Some(s))
+                    .ok_or_else(|| E::unknown_variant(s, &Arch::NAMES))
+            }
+
+            fn visit_map<M: serde::de::MapAccess<'de>>(self, map: M) -> Result<Arch, M::Error> {
+                let net = NetArch::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(Arch::from_net(net))
+            }
+        }
+        d.deserialize_any(Visitor)
     }
 }
 
@@ -143,7 +300,8 @@ fn chain(mut offset: usize, mut width: usize, widths: &[usize]) -> (Vec<Dense>, 
 }
 
 impl ActorCritic {
-    /// The network `arch` for observations of `obs_dim` values and `act_dim` actions.
+    /// The network `arch` for observations of `obs_dim` values and `act_dim` actions. Its widths must
+    /// pass [`Arch::check`] (the policy and value heads have at least one layer each).
     pub fn new(arch: Arch, obs_dim: usize, act_dim: usize) -> Self {
         // log_std first, as SB3's state_dict lists it.
         let log_std = 0;
@@ -151,9 +309,9 @@ impl ActorCritic {
         // policy's parameters (with log_std) come before the value network's, so that PPO-small's two
         // networks own two contiguous ranges that two threads can update at once (see `Branch`).
         let (shared, offset, trunk) = chain(act_dim, obs_dim, arch.shared_widths());
-        let (pi, offset, pi_width) = chain(offset, trunk, arch.head_widths());
+        let (pi, offset, pi_width) = chain(offset, trunk, arch.pi_widths());
         let action = Dense::at(offset, pi_width, act_dim);
-        let (vf, offset, vf_width) = chain(action.end(), trunk, arch.head_widths());
+        let (vf, offset, vf_width) = chain(action.end(), trunk, arch.vf_widths());
         let value = Dense::at(offset, vf_width, 1);
         ActorCritic {
             arch,
@@ -170,8 +328,8 @@ impl ActorCritic {
     }
 
     /// The architecture.
-    pub fn arch(&self) -> Arch {
-        self.arch
+    pub fn arch(&self) -> &Arch {
+        &self.arch
     }
 
     /// Observation length.

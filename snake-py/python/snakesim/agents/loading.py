@@ -345,7 +345,7 @@ def load_agent(
         policy=policy,
         path=os.fspath(model_path),
         env_kwargs=env_kwargs,
-        arch=config["arch"] if config else arch,
+        arch=runconfig.arch_label(config["arch"]) if config else arch,
         sb3_version=info.sb3_version,
         num_timesteps=info.num_timesteps,
         obs_normalizer=normalizer,

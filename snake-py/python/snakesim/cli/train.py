@@ -59,7 +59,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         )
     config = trainer.config
     print(
-        f"run {trainer.run_dir}: PPO-{config['arch']} ({config['trainer']} trainer), "
+        f"run {trainer.run_dir}: PPO-{runconfig.arch_label(config['arch'])} ({config['trainer']} trainer), "
         f"{config['joints']} joints, preset {config['preset']}, {config['timesteps']:,} timesteps, "
         f"{config['n_envs']} envs, seed {config['seed']}"
         + (f" (resuming from {trainer.resume_from[0]:,})" if trainer.resume_from else ""),

@@ -12,7 +12,10 @@ YAML layout (every key optional; unknown keys are errors)::
 
     trainer: native        # native (snake-rl, Rust) or sb3 (Stable-Baselines3)
     joints: 5              # N revolute joints (N + 1 cubes)
-    arch: small            # small: pi/vf [64, 64]; large: shared [128, 128] then pi/vf [64, 64]
+    arch: small            # small: pi/vf [64, 64]; large: shared [128, 128] then pi/vf [64, 64];
+                           # or widths, as SB3's net_arch: {shared: [], pi: [256, 256], vf: [256, 256]}
+                           # (a part left out takes small's)
+    log_std_init: 0.0      # initial log standard deviation of the action noise (SB3's log_std_init)
     preset: paper          # paper (all cubes 0.06 kg) or snakebot-gym (links 1.0 kg, the paper's code)
     timesteps: 20000000
     n_envs: 16
@@ -60,6 +63,12 @@ EVAL_SEED_OFFSET: int = _core.EVAL_SEED_OFFSET
 
 class ConfigError(ValueError):
     """A configuration that cannot be used; the message names the key and what is wrong."""
+
+
+def arch_label(arch: str | Mapping[str, Any]) -> str:
+    """A configuration's ``arch`` in words, as runs and plots name it: ``small``, ``large`` or the widths
+    (``pi [256, 256], vf [256, 256]``)."""
+    return _rust(_core.arch_label, json.dumps(plain(arch, "arch")))
 
 
 def _rust(call, *args):

@@ -56,7 +56,8 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
                 "clip_range",
             )
         }
-    model = PPO("MlpPolicy", env, policy_kwargs=policy_kwargs(agent.arch), device="cpu", seed=0, **hyper)
+    kwargs = policy_kwargs(agent.policy.net_arch)
+    model = PPO("MlpPolicy", env, policy_kwargs=kwargs, device="cpu", seed=0, **hyper)
     state = model.policy.state_dict()
     for name, array in agent.policy.tensors().items():
         aliases = [name]

@@ -49,19 +49,32 @@ class SharedMlp(BaseFeaturesExtractor):
         return self.shared_net(self.flatten(observations))
 
 
-def policy_kwargs(arch: str, shared: Sequence[int] = SHARED) -> dict[str, Any]:
-    """``policy_kwargs`` of SB3's ``PPO("MlpPolicy", ...)`` for the paper's ``small`` or ``large`` network."""
-    heads = {key: list(value) for key, value in HEADS.items()}
-    if arch == "small":
-        return {"net_arch": heads}
-    if arch == "large":
-        return {
-            "net_arch": heads,
+def policy_kwargs(
+    arch: str | Mapping[str, Sequence[int]], shared: Sequence[int] = SHARED, log_std_init: float = 0.0
+) -> dict[str, Any]:
+    """``policy_kwargs`` of SB3's ``PPO("MlpPolicy", ...)`` for a run configuration's ``arch``: the paper's
+    ``small`` or ``large`` network (``shared``: the large trunk's widths), or a mapping of widths
+    ``{shared, pi, vf}`` (a part left out takes small's: no trunk, [64, 64] heads). ``log_std_init`` is
+    SB3's, the initial log standard deviation of the action noise."""
+    if isinstance(arch, Mapping):
+        unknown = set(arch) - {"shared", *HEADS}
+        if unknown:
+            raise ValueError(f"arch: unknown keys {sorted(unknown)} (expected shared, pi, vf)")
+        shared = [int(w) for w in arch.get("shared", [])]
+        heads = {key: [int(w) for w in arch.get(key, value)] for key, value in HEADS.items()}
+    elif arch in ("small", "large"):
+        shared = list(shared) if arch == "large" else []
+        heads = {key: list(value) for key, value in HEADS.items()}
+    else:
+        raise ValueError(f"unknown arch {arch!r} (expected small, large or a mapping of widths)")
+    kwargs: dict[str, Any] = {"net_arch": heads, "log_std_init": float(log_std_init)}
+    if shared:
+        kwargs |= {
             "features_extractor_class": SharedMlp,
-            "features_extractor_kwargs": {"hidden": list(shared)},
+            "features_extractor_kwargs": {"hidden": shared},
             "share_features_extractor": True,
         }
-    raise ValueError(f"unknown arch {arch!r} (expected small or large)")
+    return kwargs
 
 
 def parameter_count(module: nn.Module) -> int:

@@ -339,7 +339,7 @@ class Trainer:
         return PPO(
             "MlpPolicy",
             venv,
-            policy_kwargs=policy_kwargs(self.config["arch"]),
+            policy_kwargs=policy_kwargs(self.config["arch"], log_std_init=self.config["log_std_init"]),
             seed=self.config["seed"],
             device=self.config["device"],
             tensorboard_log=tb,

@@ -116,7 +116,7 @@ def _experiment_key(config: Mapping[str, Any] | None, name: str) -> str:
 def _label(config: Mapping[str, Any] | None, fallback: str) -> str:
     if config is None:
         return fallback
-    return f"PPO-{config['arch']}, {config['joints']} joints ({config['preset']})"
+    return f"PPO-{runconfig.arch_label(config['arch'])}, {config['joints']} joints ({config['preset']})"
 
 
 def group_curves(curves: Sequence[Curve], mode: str = "auto") -> list[tuple[str, list[Curve]]]:
