@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -331,3 +332,34 @@ def test_widths_and_log_std_init_of_ones_own(tmp_path, capsys):
     obs = _observations(agent.env_kwargs)
     theirs, _ = PPO.load(out, device="cpu").predict(obs, deterministic=True)
     _assert_same_actions(agent.act(obs, deterministic=True), theirs)
+
+
+def _with_metadata(model: bytes, **changes: str) -> bytes:
+    """A safetensors file with some of its header's metadata replaced."""
+    size = int.from_bytes(model[:8], "little")
+    header = json.loads(model[8 : 8 + size])
+    header["__metadata__"].update(changes)
+    text = json.dumps(header).encode()
+    return len(text).to_bytes(8, "little") + text + model[8 + size :]
+
+
+@pytest.mark.parametrize(
+    ("arch", "message"),
+    [
+        ('{"pi": []}', "arch.pi: must have 1 to 8 layers, got 0"),
+        ('{"pi": [64, 64], "heads": [1]}', "unknown field `heads`"),
+        ('{"pi": [32]}', "mlp_extractor.policy_net.0.weight"),
+        ("huge", "unknown arch 'huge'"),
+    ],
+)
+def test_a_model_files_network_is_checked(tmp_path, arch, message):
+    # The widths in a model file's metadata are checked as a configuration's are, and must fit its tensors.
+    shipped = (Path(__file__).resolve().parents[2] / "models" / "goal-5.safetensors").read_bytes()
+    path = tmp_path / "model.safetensors"
+    path.write_bytes(_with_metadata(shipped, arch=arch))
+    with pytest.raises(agents.AgentError) as error:
+        agents.load_agent(path)
+    assert "\n" not in str(error.value) and message in str(error.value), str(error.value)
+    # The paper's widths spelt out are the paper's network.
+    path.write_bytes(_with_metadata(shipped, arch='{"shared": [], "pi": [64, 64], "vf": [64, 64]}'))
+    assert agents.load_agent(path).arch == "small"
