@@ -93,7 +93,9 @@ def _texts(layers: Sequence[Mapping[str, Any]]) -> list[str]:
 
 
 def merge(*layers: Mapping[str, Any]) -> dict[str, Any]:
-    """The layers merged key by key at every depth (later ones win), without defaults or checks."""
+    """The layers merged key by key at every depth (later ones win), without defaults or checks. Widths
+    of some parts of the network (``arch: {pi: [256]}``) over a named one (``large``) keep its other
+    parts (snake-rl's ``merge_layer``)."""
     return json.loads(_rust(_core.merge_layers, _texts(layers)))
 
 
