@@ -211,6 +211,15 @@ def test_plot_groups_seeds(small_run, tmp_path, capsys):
         assert image.format == "PNG" and image.size == (1050, 675)
     code, out, _ = run_cli(capsys, "plot", small_run, other_seed, "--out", fig, "--group", "none")
     assert code == 0 and out.count("PPO-small") == 2
+    # Labels of one's own, one per line in the order drawn; a count that does not match is one line.
+    code, out, _ = run_cli(
+        capsys, "plot", small_run, other_seed, other_exp, "--out", fig, "--label", "three", "--label", "four"
+    )
+    assert code == 0 and out.strip().endswith("three, 2 runs; four")
+    code, _, err = run_cli(capsys, "plot", small_run, other_exp, "--out", fig, "--label", "one")
+    assert code == 1 and err.strip().endswith(
+        "1 labels for 2 lines (PPO-small, 3 joints (paper); PPO-small, 4 joints (paper))"
+    )
 
 
 def test_replay_figure_and_gif(small_run, tmp_path, capsys):

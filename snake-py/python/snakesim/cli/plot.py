@@ -24,6 +24,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
             group=args.group,
             spread=args.spread,
             x=args.x,
+            labels=args.label,
         ),
     )
     print(f"wrote {out}: " + "; ".join(label for label, _ in drawn))
@@ -52,5 +53,11 @@ def add_parser(sub) -> None:
         choices=("timesteps", "wall_time"),
         default="timesteps",
         help="the x axis: timesteps, or the wall time of training (default timesteps)",
+    )
+    p.add_argument(
+        "--label",
+        action="append",
+        metavar="TEXT",
+        help="a line's label instead of its config's, once per line in the order they are drawn",
     )
     p.set_defaults(func=cmd_plot)

@@ -32,6 +32,9 @@ class PlotError(ValueError):
     """Runs that cannot be plotted; the message says why."""
 
 
+#: Longest label of a line (``--label``).
+MAX_LABEL = 200
+
 #: The x axes a plot can have, with their labels.
 X_AXES = {"timesteps": "timesteps", "wall_time": "wall time of training [s]"}
 
@@ -166,11 +169,13 @@ def plot_runs(
     group: str = "auto",
     spread: str = "minmax",
     x: str = "timesteps",
+    labels: Sequence[str] | None = None,
     dpi: int = 150,
 ) -> list[tuple[str, int]]:
     """Draws the curves of ``sources`` (run directories, evaluations.csv files, sweep folders) into
     ``out`` (PNG, PDF or SVG by its suffix) against ``x`` (``timesteps`` or ``wall_time``, the run's
-    seconds of training); returns (label, runs) per line."""
+    seconds of training); returns (label, runs) per line. ``labels`` name the lines in the order they
+    are drawn (one per line) instead of their configs."""
     if x not in X_AXES:
         raise PlotError(f"unknown x axis {x!r} (expected one of: {', '.join(X_AXES)})")
     axis = x
@@ -187,10 +192,18 @@ def plot_runs(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    groups = group_curves(curves, group)
+    if labels is not None:
+        if len(labels) != len(groups):
+            lines = "; ".join(label for label, _ in groups)
+            raise PlotError(f"{len(labels)} labels for {len(groups)} lines ({lines})")
+        if any(not label or len(label) > MAX_LABEL for label in labels):
+            raise PlotError(f"a label must have 1 to {MAX_LABEL} characters")
+        groups = [(label, members) for label, (_, members) in zip(labels, groups)]
     fig, ax = plt.subplots(figsize=(7.0, 4.5))
     drawn = []
     try:
-        for label, members in group_curves(curves, group):
+        for label, members in groups:
             x, mean, low, high = aggregate(members, metric)
             if len(members) > 1:
                 if spread == "std":
