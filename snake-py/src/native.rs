@@ -560,7 +560,8 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("seed", run::MAX_SEED)?;
     d.set_item("net_layers", run::MAX_NET_LAYERS)?;
     d.set_item("net_width", run::MAX_NET_WIDTH)?;
-    d.set_item("log_std_init", run::LOG_STD_INIT.to_vec())?;
+    d.set_item("log_std_init_min", run::LOG_STD_INIT[0])?;
+    d.set_item("log_std_init_max", run::LOG_STD_INIT[1])?;
     d.set_item("bench_seconds", run::MAX_BENCH_SECONDS)?;
     d.set_item("space_size", core::MAX_SPACE_SIZE)?;
     d.set_item("replay_frames", core::MAX_REPLAY_FRAMES)?;

@@ -64,7 +64,7 @@ PRESETS: list[str]
 ARCHS: list[str]
 EVAL_SEED_OFFSET: int
 NATIVE_MODEL_FILE: str
-LIMITS: dict[str, int | float | list[float]]
+LIMITS: dict[str, int | float]
 
 def arch_label(arch: str) -> str: ...
 def run_config_defaults() -> str: ...
