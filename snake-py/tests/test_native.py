@@ -45,41 +45,23 @@ def write_yaml(path, config):
     return path
 
 
+def train(base, config):
+    """``snakesim train`` of ``config`` into ``base/run``; the run directory."""
+    run_dir = base / "run"
+    argv = ["train", "--config", str(write_yaml(base / "config.yaml", config)), "--run-dir", str(run_dir)]
+    assert cli.main([*argv, "--no-progress"]) == 0
+    return run_dir
+
+
 @pytest.fixture(scope="module")
 def native_run(tmp_path_factory):
-    base = tmp_path_factory.mktemp("native")
-    run_dir = base / "run"
-    code = cli.main(
-        [
-            "train",
-            "--config",
-            str(write_yaml(base / "tiny.yaml", TINY)),
-            "--run-dir",
-            str(run_dir),
-            "--no-progress",
-        ]
-    )
-    assert code == 0
-    return run_dir
+    return train(tmp_path_factory.mktemp("native"), TINY)
 
 
 @pytest.fixture(scope="module")
 def normalized_run(tmp_path_factory):
-    base = tmp_path_factory.mktemp("native-normalized")
-    run_dir = base / "run"
     config = {**TINY, "normalize": True, "eval_freq": 0, "checkpoint_freq": 0}
-    code = cli.main(
-        [
-            "train",
-            "--config",
-            str(write_yaml(base / "n.yaml", config)),
-            "--run-dir",
-            str(run_dir),
-            "--no-progress",
-        ]
-    )
-    assert code == 0
-    return run_dir
+    return train(tmp_path_factory.mktemp("native-normalized"), config)
 
 
 def test_the_run_directory_is_every_snakesim_run_s(native_run):
@@ -299,18 +281,7 @@ def test_widths_and_log_std_init_of_ones_own(tmp_path, capsys):
     # A learning rate so small that training leaves log_std where it started (Adam moves a parameter
     # by about the learning rate per step): what remains is the initialisation.
     config = {**TINY, "arch": arch, "log_std_init": -0.7, "ppo": {**TINY["ppo"], "learning_rate": 1e-12}}
-    run_dir = tmp_path / "run"
-    code = cli.main(
-        [
-            "train",
-            "--config",
-            str(write_yaml(tmp_path / "c.yaml", config)),
-            "--run-dir",
-            str(run_dir),
-            "--no-progress",
-        ]
-    )
-    assert code == 0
+    run_dir = train(tmp_path, config)
     assert runconfig.load(run_dir / "config.yaml")["arch"] == arch
     agent = agents.load_agent(run_dir)
     assert agent.arch == "shared [24], pi [32, 16], vf [8]" and agent.policy.net_arch == arch

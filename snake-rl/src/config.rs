@@ -373,7 +373,7 @@ pub fn merge_layer(base: &mut Value, overlay: &Value) {
     if let (Some(Value::String(name)), Some(Value::Object(_))) =
         (base.get("arch"), overlay.get("arch"))
     {
-        if let Ok(named) = name.parse::<Arch>() {
+        if let Some(named) = Arch::named(name) {
             base["arch"] = serde_json::to_value(named.net()).expect("widths serialise");
         }
     }

@@ -98,6 +98,11 @@ impl Arch {
             .unwrap_or(Arch::Custom(net))
     }
 
+    /// The named network called `name` (`small` or `large`).
+    pub fn named(name: &str) -> Option<Arch> {
+        Arch::ALL.into_iter().find(|a| a.name() == Some(name))
+    }
+
     /// The configuration name: `small`, `large`, or None for a custom network.
     pub fn name(&self) -> Option<&'static str> {
         match self {
@@ -151,10 +156,9 @@ impl Arch {
 
     /// As a model file's metadata holds it: the name, or the widths as a JSON mapping.
     pub fn to_meta(&self) -> String {
-        match (self.name(), self) {
-            (Some(name), _) => name.to_owned(),
-            (None, Arch::Custom(n)) => serde_json::to_string(n).expect("widths serialise"),
-            (None, _) => unreachable!("every named architecture has a name"),
+        match self {
+            Arch::Custom(n) => serde_json::to_string(n).expect("widths serialise"),
+            named => named.name().expect("a named network").to_owned(),
         }
     }
 }
@@ -177,7 +181,7 @@ impl std::str::FromStr for Arch {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        if let Some(a) = Arch::ALL.into_iter().find(|a| a.name() == Some(s)) {
+        if let Some(a) = Arch::named(s) {
             return Ok(a);
         }
         if s.trim_start().starts_with('{') {
@@ -212,10 +216,7 @@ impl<'de> Deserialize<'de> for Arch {
             }
 
             fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<Arch, E> {
-                Arch::ALL
-                    .into_iter()
-                    .find(|a| a.name() == Some(s))
-                    .ok_or_else(|| E::unknown_variant(s, &Arch::NAMES))
+                Arch::named(s).ok_or_else(|| E::unknown_variant(s, &Arch::NAMES))
             }
 
             fn visit_map<M: serde::de::MapAccess<'de>>(self, map: M) -> Result<Arch, M::Error> {
