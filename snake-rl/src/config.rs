@@ -907,7 +907,9 @@ mod tests {
         assert!(error("arch: huge").starts_with("arch: unknown variant `huge`"));
         assert!(error("arch: {pi: []}").starts_with("arch.pi: must have 1 to 8 layers, got 0"));
         assert!(error("arch: {shared: [64, 0]}")
-            .starts_with("arch.shared: layer widths must be in [1, 4096], got 0"));
+            .starts_with("arch.shared: layer widths must be in [1, 1024], got 0"));
+        assert!(error("arch: {pi: [64, 1025]}")
+            .starts_with("arch.pi: layer widths must be in [1, 1024], got 1025"));
         assert!(error("arch: {vf: [1, 1, 1, 1, 1, 1, 1, 1, 1]}")
             .starts_with("arch.vf: must have 1 to 8 layers, got 9"));
         assert!(error("arch: {heads: [64]}").starts_with("arch.heads: unknown field `heads`"));

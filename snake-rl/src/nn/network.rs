@@ -18,8 +18,10 @@ use super::dense::Dense;
 
 /// Most tanh layers of one part of a network (the shared trunk, the policy or the value head).
 pub const MAX_LAYERS: usize = 8;
-/// Widest tanh layer.
-pub const MAX_WIDTH: usize = 4096;
+/// Widest tanh layer: four times the [256, 256] that locomotion PPO configs commonly reach for, and a
+/// bound of three parts of 8 x 1024^2 weights, about 25M parameters or 400 MB with gradients and
+/// Adam's two moments. At 4096 the same limits allowed 6.4 GB.
+pub const MAX_WIDTH: usize = 1024;
 
 /// The widths of a network's tanh layers, as SB3's `net_arch` gives them, with the paper's shared trunk
 /// in front: `shared` feeds both heads (empty: none), then `pi` (the policy) and `vf` (the value
