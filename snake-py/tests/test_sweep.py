@@ -205,20 +205,25 @@ def test_a_search_for_success_auc_on_a_cluster(cluster, tmp_path):
     # never does in these few timesteps, so a trial's success_auc is 1 or 0 by its radius alone.
     base = write_config(tmp_path, "base", {**NEAR, "eval_freq": 512})
     space = tmp_path / "space.yaml"
-    space.write_text("env.goal_radius: {uniform: [8.0, 12.0]}\nppo.n_epochs: {randint: [1, 3]}\n")
+    # A choice of lists (the policy's widths) reaches the trials as lists, and Optuna without a warning.
+    space.write_text(
+        "env.goal_radius: {uniform: [8.0, 12.0]}\nppo.n_epochs: {randint: [1, 3]}\n"
+        "arch.pi: {choice: [[8], [16, 16]]}\n"
+    )
     out = tmp_path / "search"
     done = snakesim(
         "search", base, "--space", space, "--trials", 6, "--metric", "success_auc", "--out", out,
         "--address", cluster["address"], "--cpus-per-trial", 1, timeout=600,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
-    assert "Traceback" not in done.stderr
+    assert "Traceback" not in done.stderr and "Warning" not in done.stderr, done.stderr
 
     # success_auc, computed here from each trial's evaluations.csv: the mean of its success rates.
     aucs = {}
     for run in sorted((out / "trials").iterdir()):
         config = yaml.safe_load((run / "config.yaml").read_text())
         assert 8.0 <= config["env"]["goal_radius"] <= 12.0 and 1 <= config["ppo"]["n_epochs"] <= 3
+        assert config["arch"] in ({"shared": [], "pi": pi, "vf": [64, 64]} for pi in ([8], [16, 16]))
         rates = [float(r["success_rate"]) for r in read_csv(run / "evaluations.csv")]
         assert set(rates) == ({1.0} if config["env"]["goal_radius"] > 10.0 else {0.0})
         aucs[run.name] = (sum(rates) / len(rates), len(rates), config["env"]["goal_radius"])
@@ -236,7 +241,7 @@ def test_a_search_for_success_auc_on_a_cluster(cluster, tmp_path):
     # Optuna's importance of the two keys for the final success_auc, written and printed.
     record = json.loads((out / "importance.json").read_text())
     assert record["metric"] == "success_auc" and record["trials"] == 6
-    assert sorted(record["importance"]) == ["env.goal_radius", "ppo.n_epochs"]
+    assert sorted(record["importance"]) == ["arch.pi", "env.goal_radius", "ppo.n_epochs"]
     assert sum(record["importance"].values()) == pytest.approx(1.0)
     assert "importance for the final success_auc over 6 trials: " in done.stdout
 
@@ -405,19 +410,51 @@ def test_an_unreachable_address_is_one_line_within_the_timeout(tmp_path):
     )
 
 
-def test_the_shipped_search_space_fits_the_config_it_searches():
-    # snake-py/configs/spaces/paper-5.yaml, with the base config and --set of docs/experiments.md's
-    # search: every end of a range and every choice is a valid value, and every pairing of rollout
-    # shape and minibatch size fits (the smallest rollout holds the largest minibatch).
+@pytest.mark.parametrize(
+    "space_file, config, sets, keys",
+    [
+        ("paper-5.yaml", "paper-tuned-5.yaml", ["seed=100", "timesteps=786432", "eval_freq=65536"], 12),
+        ("paper-10.yaml", "paper-tuned-10.yaml", ["seed=100", "timesteps=1572864", "eval_freq=262144"], 13),
+    ],
+)
+def test_the_shipped_search_spaces_fit_the_configs_they_search(space_file, config, sets, keys):
+    # snake-py/configs/spaces/*.yaml, with the base config and --set of docs/experiments.md's searches:
+    # every end of a range and every choice is a valid value, and every pairing of rollout shape and
+    # minibatch size fits (the smallest rollout holds the largest minibatch).
     from snakesim.sweeps import plan, search
 
     configs = Path(__file__).resolve().parents[1] / "configs"
-    sets = ["seed=100", "timesteps=786432", "eval_freq=65536"]
-    ((_, base),) = plan.load_configs([configs / "paper-tuned-5.yaml"], sets).items()
-    space = search.load_space(configs / "spaces" / "paper-5.yaml", base)
-    assert len(space) == 12 and not any(key.startswith("env") for key in space)
+    ((_, base),) = plan.load_configs([configs / config], sets).items()
+    space = search.load_space(configs / "spaces" / space_file, base)
+    assert len(space) == keys and not any(key.startswith("env") for key in space)
     rollout = min(space["ppo.n_steps"][1]) * min(space["n_envs"][1])
     assert max(space["ppo.batch_size"][1]) <= rollout
+
+
+def test_a_searchs_choices_reach_optuna_as_plain_values_and_trials_as_written():
+    # Optuna's categorical distributions take None, bools, numbers and strings; a list or mapping goes
+    # as its JSON text and comes back to the trial as the space wrote it (true is not taken for 1).
+    from snakesim.sweeps import search
+
+    space = {
+        "arch.pi": ("choice", [[64, 64], [256, 256, 256]]),
+        "arch": ("choice", ["small", {"pi": [32]}]),
+        "ppo.target_kl": ("choice", [None, 0.03]),
+        "normalize": ("choice", [1, True]),
+        "ppo.n_epochs": ("randint", [3, 20]),
+    }
+    tuned = search._tune_space(space)
+    assert tuned["arch.pi"].categories == ["[64, 64]", "[256, 256, 256]"]
+    assert tuned["arch"].categories == ["small", '{"pi": [32]}']
+    assert tuned["ppo.target_kl"].categories == [None, 0.03]
+    params = {"arch.pi": "[256, 256, 256]", "arch": '{"pi": [32]}', "ppo.target_kl": None, "normalize": True}
+    assert search._from_tune(space, {**params, "ppo.n_epochs": 7}) == {
+        "arch.pi": [256, 256, 256],
+        "arch": {"pi": [32]},
+        "ppo.target_kl": None,
+        "normalize": True,
+        "ppo.n_epochs": 7,
+    }
 
 
 def test_a_search_varies_the_networks_widths_and_log_std_init(tmp_path):

@@ -102,30 +102,61 @@ def load_space(path: str | os.PathLike, base: Mapping[str, Any]) -> dict[str, tu
     return out
 
 
+def _optuna_value(value: Any) -> Any:
+    """A choice as Optuna's categorical distributions take it (a list or mapping as its JSON text)."""
+    return value if value is None or isinstance(value, (bool, int, float, str)) else json.dumps(value)
+
+
 def _tune_space(space: Mapping[str, tuple[str, list[Any]]]) -> dict[str, Any]:
+    """The space as Tune's distributions. A list or mapping choice (``arch.pi: {choice: [[64, 64],
+    ...]}``) goes to Tune and Optuna as its JSON text, the values Optuna's categorical distributions
+    take without a warning; :func:`_from_tune` turns it back."""
     from ray import tune
 
     make = {
         "uniform": lambda a: tune.uniform(a[0], a[1]),
         "loguniform": lambda a: tune.loguniform(a[0], a[1]),
         "randint": lambda a: tune.randint(a[0], a[1] + 1),  # Tune's upper end is excluded
-        "choice": lambda a: tune.choice(a),
+        "choice": lambda a: tune.choice([_optuna_value(v) for v in a]),
     }
     return {key: make[kind](args) for key, (kind, args) in space.items()}
+
+
+def _from_tune(space: Mapping[str, tuple[str, list[Any]]], params: Mapping[str, Any]) -> dict[str, Any]:
+    """A trial's values as configuration values: Optuna's numpy numbers as Python numbers, and each
+    choice as the space wrote it (a list or mapping back from its JSON text)."""
+    out = {}
+    for key, value in params.items():
+        value = _plain(value)
+        kind, args = space[key]
+        if kind == "choice":
+            value = next(a for a in args if _same(_optuna_value(a), value))
+        out[key] = value
+    return out
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal and of one type, so that a choice of ``true`` is not taken for ``1``."""
+    return type(a) is type(b) and a == b
 
 
 def _overrides(base: Mapping[str, Any], params: Mapping[str, Any]) -> dict[str, Any]:
     return runconfig.merge(base, *(sweep.nested(key, value) for key, value in params.items()))
 
 
-def train_search_trial(params: Mapping[str, Any], base: Mapping[str, Any], trials_dir: str) -> None:
+def train_search_trial(
+    params: Mapping[str, Any],
+    base: Mapping[str, Any],
+    trials_dir: str,
+    space: Mapping[str, tuple[str, list[Any]]],
+) -> None:
     """The Tune trainable of a search: the base configuration with the trial's values."""
     from ray import tune
 
     from snakesim.sweeps.tune_runner import train_trial
 
     name = tune.get_context().get_trial_name()
-    overrides = _overrides(base, {key: _plain(value) for key, value in params.items()})
+    overrides = _overrides(base, _from_tune(space, params))
     train_trial({"trial": {"name": name, "run_dir": str(Path(trials_dir) / name), "overrides": overrides}})
 
 
@@ -210,7 +241,7 @@ def search(
             trials_dir = (out_path / sweep.TRIALS_DIR).resolve()
             outcome = tune_runner.fit(
                 out_path,
-                tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir)),
+                tune.with_parameters(train_search_trial, base=base, trials_dir=str(trials_dir), space=parsed),
                 _tune_space(parsed),
                 total=trials,
                 names=_numbered(),
@@ -299,11 +330,6 @@ def _finals(out: Path, trials: Sequence[sweep.Trial]) -> list[tuple[sweep.Trial,
         if rows:
             found.append((trial, rows[-1]))
     return found
-
-
-def _optuna_value(value: Any) -> Any:
-    """A choice as Optuna's categorical distributions take it (a list or mapping as its JSON text)."""
-    return value if value is None or isinstance(value, (bool, int, float, str)) else json.dumps(value)
 
 
 def importance(
