@@ -238,7 +238,7 @@ def test_a_search_for_success_auc_on_a_cluster(cluster, tmp_path):
     assert header == f"# The best trial of the search {out} ({best}): final success_auc {aucs[best][0]:.4g}."
     assert yaml.safe_load((out / "best.yaml").read_text())["env"]["goal_radius"] == aucs[best][2]
 
-    # Optuna's importance of the two keys for the final success_auc, written and printed.
+    # Optuna's importance of the three keys for the final success_auc, written and printed.
     record = json.loads((out / "importance.json").read_text())
     assert record["metric"] == "success_auc" and record["trials"] == 6
     assert sorted(record["importance"]) == ["arch.pi", "env.goal_radius", "ppo.n_epochs"]
@@ -448,13 +448,15 @@ def test_a_searchs_choices_reach_optuna_as_plain_values_and_trials_as_written():
     assert tuned["arch"].categories == ["small", '{"pi": [32]}']
     assert tuned["ppo.target_kl"].categories == [None, 0.03]
     params = {"arch.pi": "[256, 256, 256]", "arch": '{"pi": [32]}', "ppo.target_kl": None, "normalize": True}
-    assert search._from_tune(space, {**params, "ppo.n_epochs": 7}) == {
+    values = search._from_tune(space, {**params, "ppo.n_epochs": 7})
+    assert values == {
         "arch.pi": [256, 256, 256],
         "arch": {"pi": [32]},
         "ppo.target_kl": None,
         "normalize": True,
         "ppo.n_epochs": 7,
     }
+    assert values["normalize"] is True  # == alone would also accept the choice 1
 
 
 def test_a_search_varies_the_networks_widths_and_log_std_init(tmp_path):
