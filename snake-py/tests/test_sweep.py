@@ -459,6 +459,26 @@ def test_a_searchs_choices_reach_optuna_as_plain_values_and_trials_as_written():
     assert values["normalize"] is True  # == alone would also accept the choice 1
 
 
+def test_the_importance_study_has_the_distributions_optuna_searched():
+    # importance() rebuilds a study; its distributions are what Tune's OptunaSearch made of the space
+    # (randint includes both ends, as the space file says, though Tune's own upper end is excluded).
+    from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
+    from snakesim.sweeps import search
+
+    space = {
+        "ppo.n_epochs": ("randint", [3, 20]),
+        "ppo.learning_rate": ("loguniform", [1.0e-5, 1.0e-3]),
+        "ppo.ent_coef": ("uniform", [0.0, 0.01]),
+        "arch.pi": ("choice", [[64, 64], [256, 256]]),
+    }
+    assert search._optuna_space(space) == {
+        "ppo.n_epochs": IntDistribution(3, 20),
+        "ppo.learning_rate": FloatDistribution(1.0e-5, 1.0e-3, log=True),
+        "ppo.ent_coef": FloatDistribution(0.0, 0.01),
+        "arch.pi": CategoricalDistribution(["[64, 64]", "[256, 256]"]),
+    }
+
+
 def test_a_search_varies_the_networks_widths_and_log_std_init(tmp_path):
     # arch.pi / arch.vf / arch.shared take lists of widths; a part the trial leaves alone keeps the base
     # network's widths (large keeps its trunk).

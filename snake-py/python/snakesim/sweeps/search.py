@@ -122,6 +122,15 @@ def _tune_space(space: Mapping[str, tuple[str, list[Any]]]) -> dict[str, Any]:
     return {key: make[kind](args) for key, (kind, args) in space.items()}
 
 
+def _optuna_space(space: Mapping[str, tuple[str, list[Any]]]) -> dict[str, Any]:
+    """The space as the Optuna distributions that Tune's ``OptunaSearch`` searches: its own
+    conversion of :func:`_tune_space`, so that the study :func:`importance` rebuilds has the
+    search's distributions by construction."""
+    from ray.tune.search.optuna import OptunaSearch
+
+    return OptunaSearch.convert_search_space(_tune_space(space))
+
+
 def _from_tune(space: Mapping[str, tuple[str, list[Any]]], params: Mapping[str, Any]) -> dict[str, Any]:
     """A trial's values as configuration values: Optuna's numpy numbers as Python numbers, and each
     choice as the space wrote it (a list or mapping back from its JSON text)."""
@@ -340,15 +349,8 @@ def importance(
     the trials, as Tune's OptunaSearch saw them, ASHA-stopped trials with their value where they
     stopped. The importances are normalised to sum to 1."""
     import optuna
-    from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
 
-    make = {
-        "uniform": lambda a: FloatDistribution(a[0], a[1]),
-        "loguniform": lambda a: FloatDistribution(a[0], a[1], log=True),
-        "randint": lambda a: IntDistribution(a[0], a[1]),
-        "choice": lambda a: CategoricalDistribution([_optuna_value(v) for v in a]),
-    }
-    distributions = {key: make[kind](args) for key, (kind, args) in space.items()}
+    distributions = _optuna_space(space)
     verbosity = optuna.logging.get_verbosity()
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
