@@ -1,0 +1,61 @@
+"""Is a task's failure the ground's or the controller's? Runs ``baseline:steer`` with fixed gait
+settings (amplitude and frequency actions, steering gain) on the same episodes and counts, per
+episode, how many of the variants reach the goal (docs/tasks.md, "Why the rough task resists").
+Usage: steer_variants.py [EPISODES] [SEED] [TASK] [JOINTS]; TASK is goal, pegs or rough."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+from snakesim.agents.baselines import goal_bearing
+from snakesim.agents.evaluation import run_episodes
+
+#: (amplitude action, frequency action, steering gain): steer's own (0, 0, 1), and each changed.
+VARIANTS = (
+    (0.0, 0.0, 1.0),
+    (-0.5, 0.0, 1.0),
+    (0.5, 0.0, 1.0),
+    (0.0, -0.5, 1.0),
+    (0.0, 0.5, 1.0),
+    (-0.5, 0.5, 1.0),
+    (0.5, -0.5, 1.0),
+    (0.0, 0.0, 2.0),
+    (0.0, 0.0, 0.5),
+)
+
+
+def steer(joints: int, amplitude: float, frequency: float, gain: float):
+    def act(obs: np.ndarray) -> np.ndarray:
+        obs = np.atleast_2d(obs)
+        actions = np.zeros((obs.shape[0], 3), dtype=np.float32)
+        actions[:, 0] = np.clip(-gain * goal_bearing(obs, joints), -1.0, 1.0)
+        actions[:, 1:] = amplitude, frequency
+        return actions
+
+    return act
+
+
+def main() -> None:
+    episodes = int(sys.argv[1]) if len(sys.argv) > 1 else 50
+    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 1000
+    task = sys.argv[3] if len(sys.argv) > 3 else "rough"
+    joints = int(sys.argv[4]) if len(sys.argv) > 4 else 10
+    wins = []
+    for amplitude, frequency, gain in VARIANTS:
+        done = run_episodes(
+            steer(joints, amplitude, frequency, gain), {"task": task, "joints": joints}, episodes, seed
+        )
+        wins.append([bool(e["success"]) for e in done])
+        rate = np.mean(wins[-1])
+        print(
+            f"amplitude {amplitude:+.1f}, frequency {frequency:+.1f}, gain {gain:.1f}: {rate:.2f}", flush=True
+        )
+    per_episode = np.sum(wins, axis=0)
+    print(f"episodes won by at least one variant: {np.mean(per_episode > 0):.2f}")
+    counts = np.bincount(per_episode, minlength=len(VARIANTS) + 1)
+    print("episodes by how many variants won them (0 to 9):", " ".join(str(c) for c in counts))
+
+
+if __name__ == "__main__":
+    main()
