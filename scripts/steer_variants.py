@@ -1,7 +1,9 @@
 """Is a task's failure the ground's or the controller's? Runs ``baseline:steer`` with fixed gait
 settings (amplitude and frequency actions, steering gain) on the same episodes and counts, per
-episode, how many of the variants reach the goal (docs/tasks.md, "Why the rough task resists").
-Usage: steer_variants.py [EPISODES] [SEED] [TASK] [JOINTS]; TASK is goal, pegs or rough."""
+episode, how many of the variants reach the goal (docs/tasks.md, "What did not work").
+Usage: steer_variants.py [EPISODES] [SEED] [TASK] [JOINTS] [--nudge]; TASK is goal, pegs or rough.
+``--nudge`` runs steer's own wave with its steering gain changed by 0.1 % steps instead (NUDGED):
+a task whose outcomes such a change flips is decided by chaos, not by the ground."""
 
 from __future__ import annotations
 
@@ -24,6 +26,9 @@ VARIANTS = (
     (0.0, 0.0, 0.5),
 )
 
+#: Steer's own wave with its gain changed by -0.2 % to +0.2 %.
+NUDGED = tuple((0.0, 0.0, gain) for gain in (1.0, 1.001, 0.999, 1.002, 0.998))
+
 
 def steer(joints: int, amplitude: float, frequency: float, gain: float):
     def act(obs: np.ndarray) -> np.ndarray:
@@ -37,24 +42,26 @@ def steer(joints: int, amplitude: float, frequency: float, gain: float):
 
 
 def main() -> None:
-    episodes = int(sys.argv[1]) if len(sys.argv) > 1 else 50
-    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 1000
-    task = sys.argv[3] if len(sys.argv) > 3 else "rough"
-    joints = int(sys.argv[4]) if len(sys.argv) > 4 else 10
+    args = [a for a in sys.argv[1:] if a != "--nudge"]
+    variants = NUDGED if "--nudge" in sys.argv[1:] else VARIANTS
+    episodes = int(args[0]) if len(args) > 0 else 50
+    seed = int(args[1]) if len(args) > 1 else 1000
+    task = args[2] if len(args) > 2 else "rough"
+    joints = int(args[3]) if len(args) > 3 else 10
     wins = []
-    for amplitude, frequency, gain in VARIANTS:
+    for amplitude, frequency, gain in variants:
         done = run_episodes(
             steer(joints, amplitude, frequency, gain), {"task": task, "joints": joints}, episodes, seed
         )
         wins.append([bool(e["success"]) for e in done])
         rate = np.mean(wins[-1])
         print(
-            f"amplitude {amplitude:+.1f}, frequency {frequency:+.1f}, gain {gain:.1f}: {rate:.2f}", flush=True
+            f"amplitude {amplitude:+.1f}, frequency {frequency:+.1f}, gain {gain:.3f}: {rate:.2f}", flush=True
         )
     per_episode = np.sum(wins, axis=0)
     print(f"episodes won by at least one variant: {np.mean(per_episode > 0):.2f}")
-    counts = np.bincount(per_episode, minlength=len(VARIANTS) + 1)
-    print("episodes by how many variants won them (0 to 9):", " ".join(str(c) for c in counts))
+    counts = np.bincount(per_episode, minlength=len(variants) + 1)
+    print(f"episodes by how many variants won them (0 to {len(variants)}):", " ".join(str(c) for c in counts))
 
 
 if __name__ == "__main__":
