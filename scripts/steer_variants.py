@@ -12,6 +12,7 @@ import sys
 import numpy as np
 from snakesim.agents.baselines import goal_bearing
 from snakesim.agents.evaluation import run_episodes
+from win_overlap import print_counts  # this directory's script, on sys.path when run as a script
 
 #: (amplitude action, frequency action, steering gain): steer's own (0, 0, 1), and each changed.
 VARIANTS = (
@@ -58,10 +59,7 @@ def main() -> None:
         print(
             f"amplitude {amplitude:+.1f}, frequency {frequency:+.1f}, gain {gain:.3f}: {rate:.2f}", flush=True
         )
-    per_episode = np.sum(wins, axis=0)
-    print(f"episodes won by at least one variant: {np.mean(per_episode > 0):.2f}")
-    counts = np.bincount(per_episode, minlength=len(variants) + 1)
-    print(f"episodes by how many variants won them (0 to {len(variants)}):", " ".join(str(c) for c in counts))
+    print_counts(np.array(wins))
 
 
 if __name__ == "__main__":

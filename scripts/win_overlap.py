@@ -43,12 +43,18 @@ def main() -> None:
         both, expected = np.mean(ra & rb), ra.mean() * rb.mean()
         phi = np.corrcoef(ra, rb)[0, 1] if 0 < ra.mean() < 1 and 0 < rb.mean() < 1 else float("nan")
         print(f"{a} and {b}: both win {both:.2f} (independent: {expected:.2f}), phi {phi:.2f}")
+    print_counts(table)
+
+
+def print_counts(table: np.ndarray) -> None:
+    """For a (controllers x episodes) table of wins: the share of episodes won by at least one and by
+    all, and how many controllers won each episode beside what independent draws predict."""
+    n = len(table)
     per_episode = table.sum(axis=0)
-    counts = np.bincount(per_episode, minlength=len(paths) + 1)
+    counts = np.bincount(per_episode, minlength=n + 1)
     expected = independent_counts(list(table.mean(axis=1))) * table.shape[1]
-    everyone = np.mean(per_episode == len(paths))
-    print(f"won by at least one: {np.mean(per_episode > 0):.2f}, by all: {everyone:.2f}")
-    print(f"episodes by how many won them (0 to {len(paths)}):", " ".join(str(c) for c in counts))
+    print(f"won by at least one: {np.mean(per_episode > 0):.2f}, by all: {np.mean(per_episode == n):.2f}")
+    print(f"episodes by how many won them (0 to {n}):", " ".join(str(c) for c in counts))
     print("if independent:", " ".join(f"{c:.1f}" for c in expected))
 
 
