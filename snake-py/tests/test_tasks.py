@@ -69,33 +69,49 @@ def test_the_terrain_observation_maps_the_drawn_ground_around_the_head():
     extended = gymnasium.make(TASKS["rough"], joints=joints)
     terrain = gymnasium.make(TASKS["rough"], joints=joints, observation="terrain")
     terrain.unwrapped.set_physics_trace(True)
-    dim = extended.observation_space.shape[0]
+    dim, n = extended.observation_space.shape[0], 2 + 2 * joints
     assert terrain.observation_space.shape == (dim + 3 + side * side,)
-    a, _ = extended.reset(seed=5)
-    b, _ = terrain.reset(seed=5)
+
+    def check(a, b, goal):
+        # The paper's values and the wave's phase are the extended observation's, bit for bit.
+        np.testing.assert_array_equal(a[:n], b[:n])
+        np.testing.assert_array_equal(a[n + 6 :], b[n + 6 : dim])
+        world = json.loads(terrain.unwrapped._env.world_json())
+        x, y = float(b[0]), float(b[1])
+        up, grid = b[dim : dim + 3], b[dim + 3 :].reshape(side, side)
+        # The head's rotation as pybullet computes it from the head's quaternion: its rows give the
+        # world's up in the head frame, its middle column the head's y axis (the body's long axis).
+        head = terrain.unwrapped.physics_trace()["poses"][-1][0]
+        rotation = np.array(pybullet.getMatrixFromQuaternion(head[3:])).reshape(3, 3)
+        np.testing.assert_allclose(up, rotation[2], atol=1e-6)
+        # The rolled head frame: the heading of the long axis, left mirrored upside down.
+        heading = np.arctan2(-rotation[0, 1], rotation[1, 1])
+        mirror = -1.0 if rotation[2, 2] < 0 else 1.0
+        s, c = np.sin(heading), np.cos(heading)
+        np.testing.assert_allclose(b[n + 2 : n + 4], [s, c], atol=1e-6)
+        dx, dy = goal[0] - x, goal[1] - y
+        expected_goal = [mirror * (c * dx + s * dy), -s * dx + c * dy]
+        np.testing.assert_allclose(b[n : n + 2], expected_goal, atol=1e-4)
+        # The middle point is the ground under the head less the head's z; every other point is the
+        # ground there, in the rolled head frame (x to the left, y behind), less the same z.
+        head_z = _ground(world, x, y) - grid[2, 2]
+        for i in range(side):
+            for j in range(side):
+                hx, hy = mirror * (j - 2) * spacing, (i - 2) * spacing
+                expected = _ground(world, x + c * hx - s * hy, y + s * hx + c * hy) - head_z
+                assert abs(grid[i, j] - expected) < 1e-4, (i, j, grid[i, j], expected)
+        assert np.ptp(grid) > 0.05
+        return mirror
+
+    # Seed 5, steered gently: upright after its first step, upside down by its 20th.
+    extended.reset(seed=5)
+    terrain.reset(seed=5)
+    mirrors = []
     for _ in range(20):
         a, *_ = extended.step(np.array([0.3, 0.0, 0.0], np.float32))
-        b, *_ = terrain.step(np.array([0.3, 0.0, 0.0], np.float32))
-    # Everything before the map is the extended observation, bit for bit.
-    np.testing.assert_array_equal(a, b[:dim])
-    world = json.loads(terrain.unwrapped._env.world_json())
-    x, y = float(b[0]), float(b[1])
-    s, c = float(b[2 + 2 * joints + 2]), float(b[2 + 2 * joints + 3])
-    up, grid = b[dim : dim + 3], b[dim + 3 :].reshape(side, side)
-    # The world's up in the head frame: the last row of the head's rotation matrix, as pybullet
-    # computes it from the head's quaternion.
-    head = terrain.unwrapped.physics_trace()["poses"][-1][0]
-    rotation = np.array(pybullet.getMatrixFromQuaternion(head[3:])).reshape(3, 3)
-    np.testing.assert_allclose(up, rotation[2], atol=1e-6)
-    # The middle point is the ground under the head less the head's z; every other point is the
-    # ground there, in the head frame (x to the left, y behind), less the same z.
-    head_z = _ground(world, x, y) - grid[2, 2]
-    for i in range(side):
-        for j in range(side):
-            hx, hy = (j - 2) * spacing, (i - 2) * spacing
-            expected = _ground(world, x + c * hx - s * hy, y + s * hx + c * hy) - head_z
-            assert abs(grid[i, j] - expected) < 1e-4, (i, j, grid[i, j], expected)
-    assert np.ptp(grid) > 0.05
+        b, _, _, _, info = terrain.step(np.array([0.3, 0.0, 0.0], np.float32))
+        mirrors.append(check(a, b, info["goal"]))
+    assert mirrors[0] == 1.0 and mirrors[-1] == -1.0, mirrors
 
 
 def test_pegs_lie_between_start_and_goal():

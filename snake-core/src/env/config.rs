@@ -221,10 +221,12 @@ pub enum ObservationLayout {
     /// the heading (2) and the base's planar velocity in the head frame (2); `2 + 2N + 6` in all.
     Extended,
     /// The extended layout (with the wave's phase where it has one) followed by the world's up
-    /// (its z axis) in the head frame (3: (0, 0, 1) upright, (0, 0, -1) upside down) and a height
+    /// (its z axis) in the head's frame (3: (0, 0, 1) upright, (0, 0, -1) upside down) and a height
     /// map of the ground around the head ([`super::height_map`]): `HEIGHT_MAP_LEN` (25) heights
-    /// relative to the head's z on a 5 x 5 grid, 0.75 m apart, in the head frame; `2 + 2N + 6 + 3
-    /// + 25` in all.
+    /// relative to the head's z on a 5 x 5 grid, 0.75 m apart; `2 + 2N + 6 + 3 + 25` in all. The
+    /// goal, heading, velocity and map are in the rolled head frame (`observation::rolled_frame`:
+    /// the heading of the body's long axis, left mirrored upside down), which rolling over on
+    /// hills does not scramble; upright and level it is the extended layout's frame.
     Terrain,
 }
 

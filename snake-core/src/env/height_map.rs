@@ -94,13 +94,14 @@ impl GroundProbe {
     /// `(j - c) * HEIGHT_MAP_SPACING` along the head frame's x and `(i - c) * HEIGHT_MAP_SPACING`
     /// along its y (c = the middle index; the head frame's -y points ahead and +x to the left), and
     /// holds the ground's height there minus the head's z.
-    pub fn write(&self, position: [f64; 3], yaw: f64, out: &mut [f32]) {
+    pub fn write(&self, position: [f64; 3], yaw: f64, mirror: f64, out: &mut [f32]) {
         let (s, c) = yaw.sin_cos();
         let middle = (HEIGHT_MAP_SIDE / 2) as f64;
         for i in 0..HEIGHT_MAP_SIDE {
             let hy = (i as f64 - middle) * HEIGHT_MAP_SPACING;
             for j in 0..HEIGHT_MAP_SIDE {
-                let hx = (j as f64 - middle) * HEIGHT_MAP_SPACING;
+                // `mirror` -1 (the head upside down): the frame's +x, the map's columns, is mirrored.
+                let hx = mirror * (j as f64 - middle) * HEIGHT_MAP_SPACING;
                 // Head frame to world: rotation by +yaw about z.
                 let (x, y) = (position[0] + c * hx - s * hy, position[1] + s * hx + c * hy);
                 out[i * HEIGHT_MAP_SIDE + j] = (self.height(x, y) - position[2]) as f32;
@@ -177,7 +178,7 @@ mod tests {
         let base = crate::robot::Simulation::base_state(&snake).unwrap();
         let p = base.pose.position;
         let mut map = [0.0_f32; HEIGHT_MAP_LEN];
-        GroundProbe::of(&world).write([p.x, p.y, p.z], 0.0, &mut map);
+        GroundProbe::of(&world).write([p.x, p.y, p.z], 0.0, 1.0, &mut map);
         // The cube's centre stands 0.25 / cos(slope) above the ground below it.
         let expected = -0.25 / 0.2_f64.atan().cos();
         let c = HEIGHT_MAP_SIDE / 2;
@@ -203,7 +204,7 @@ mod tests {
         assert!((slope.height(7.0, 2.0) - 2.0).abs() < 1e-12);
         // Heading 90 degrees: the head frame's x is world y, its -y world x (ahead).
         let mut out = [0.0_f32; HEIGHT_MAP_LEN];
-        slope.write([1.0, 0.0, 0.25], std::f64::consts::FRAC_PI_2, &mut out);
+        slope.write([1.0, 0.0, 0.25], std::f64::consts::FRAC_PI_2, 1.0, &mut out);
         let c = HEIGHT_MAP_SIDE / 2;
         assert_eq!(out[c * HEIGHT_MAP_SIDE + c], -0.25);
         // One point to the left (+x of the head frame) is world y = +spacing: higher by spacing.

@@ -14,6 +14,23 @@ pub(crate) fn heading(base: &BaseState) -> f64 {
     (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
 }
 
+/// The terrain layout's head frame, which rolling does not scramble: its heading is that of the
+/// base's y axis (the body's long axis: rolling about it leaves it where it is) less a quarter
+/// turn, so that upright and level it equals [`heading`]; its second value is -1 when the head is
+/// upside down (its z axis below the horizontal) and +1 otherwise. The x axis that [`heading`]
+/// follows turns half a turn when the head rolls over and points up or down, with no heading at
+/// all, when it lies on its side, which it does again and again on hills; and upside down the yaw
+/// joints bend the other way, so the frame's left is mirrored to stay the side that a positive
+/// steering bends the body towards (docs/tasks.md, "The head frame on hills").
+pub(crate) fn rolled_frame(base: &BaseState) -> (f64, f64) {
+    let q = base.pose.orientation.quaternion().coords; // (x, y, z, w)
+    let (x, y, z, w) = (q.x, q.y, q.z, q.w);
+    // The base's y axis in the world is (R01, R11, R21); the heading of x = (R11, -R01).
+    let (r01, r11) = (2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z));
+    let r22 = 1.0 - 2.0 * (x * x + y * y);
+    ((-r01).atan2(r11), if r22 < 0.0 { -1.0 } else { 1.0 })
+}
+
 /// Scratch buffers of the joint reads, kept to make stepping allocation-free.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct JointScratch {
@@ -55,10 +72,14 @@ pub(crate) fn write(
         obs[3 + 2 * j] = scratch.velocities[j] as f32;
     }
     if layout.is_extended() {
-        let yaw = heading(&base);
+        let (yaw, mirror) = if layout == ObservationLayout::Terrain {
+            rolled_frame(&base)
+        } else {
+            (heading(&base), 1.0)
+        };
         let (s, c) = yaw.sin_cos();
-        // World vectors into the head frame: rotation by -yaw about z.
-        let to_head = |vx: f64, vy: f64| (c * vx + s * vy, -s * vx + c * vy);
+        // World vectors into the head frame: rotation by -yaw about z, left mirrored upside down.
+        let to_head = |vx: f64, vy: f64| (mirror * (c * vx + s * vy), -s * vx + c * vy);
         let (gx, gy) = to_head(goal.0 - p.x, goal.1 - p.y);
         let v = base.linear_velocity;
         let (vx, vy) = to_head(v.x, v.y);
@@ -72,9 +93,9 @@ pub(crate) fn write(
             obs[2 + 2 * n + 7] = c as f32;
         }
         if layout == ObservationLayout::Terrain {
-            // After the wave's phase where there is one: the world's up in the head frame, then the
-            // map. The cube snake's joints all turn about its z axis, so the head's up is the whole
-            // body's: on hills it rolls over, and upside down its steering is mirrored.
+            // After the wave's phase where there is one: the world's up in the head's own frame
+            // (not mirrored), then the map. The cube snake's joints all turn about its z axis, so the
+            // head's up is the whole body's: on hills it rolls over.
             let at = obs.len() - HEIGHT_MAP_LEN;
             let up = base
                 .pose
@@ -83,8 +104,61 @@ pub(crate) fn write(
             for (o, u) in obs[at - 3..at].iter_mut().zip(up.iter()) {
                 *o = *u as f32;
             }
-            ground.write([p.x, p.y, p.z], yaw, &mut obs[at..]);
+            ground.write([p.x, p.y, p.z], yaw, mirror, &mut obs[at..]);
         }
     }
     Ok(base)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::Pose;
+    use nalgebra::{UnitQuaternion, Vector3};
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    fn base(orientation: UnitQuaternion<f64>) -> BaseState {
+        BaseState {
+            pose: Pose {
+                position: Vector3::zeros(),
+                orientation,
+            },
+            linear_velocity: Vector3::zeros(),
+            angular_velocity: Vector3::zeros(),
+        }
+    }
+
+    #[test]
+    fn the_rolled_frame_keeps_its_heading_when_the_head_rolls_and_mirrors_upside_down() {
+        for yaw in [-2.5, -0.7, 0.0, 0.4, 1.9, 3.0] {
+            let level = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
+            // Upright and level: the x axis's heading, not mirrored.
+            let (h, m) = rolled_frame(&base(level));
+            assert!((h - heading(&base(level))).abs() < 1e-12 && m == 1.0);
+            // Rolled about the body's long (y) axis: on its side, the x axis points straight down
+            // and `heading` has no meaning; upside down it is half a turn off. The rolled frame
+            // keeps the heading, mirrored once the head's z points below the horizontal.
+            for (roll, mirror) in [
+                (0.3, 1.0),
+                (1.4, 1.0),
+                (1.7, -1.0),
+                (PI, -1.0),
+                (-2.0, -1.0),
+            ] {
+                let rolled = level * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), roll);
+                let (h, m) = rolled_frame(&base(rolled));
+                let off = (h - yaw + PI).rem_euclid(2.0 * PI) - PI;
+                assert!(off.abs() < 1e-9, "yaw {yaw} roll {roll}: heading {h}");
+                assert_eq!(m, mirror, "yaw {yaw} roll {roll}");
+            }
+            let upside_down = level * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI);
+            let off = (heading(&base(upside_down)) - yaw).rem_euclid(2.0 * PI);
+            assert!((off - PI).abs() < 1e-9, "{off}");
+            // Pitched (the head raised about its x axis) short of vertical: still the heading.
+            let pitched =
+                level * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2 - 0.2);
+            let (h, _) = rolled_frame(&base(pitched));
+            assert!(((h - yaw + PI).rem_euclid(2.0 * PI) - PI).abs() < 1e-9);
+        }
+    }
 }

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::{Error, Preset};
+use std::f64::consts::TAU;
 
 fn env(config: EnvConfig) -> SnakeEnv {
     SnakeEnv::new(config).expect("valid config")
@@ -664,18 +665,51 @@ fn terrain_observation_is_the_extended_one_then_the_ground_under_and_around_the_
     });
     let dim = extended.observation_dim();
     assert_eq!(terrain.observation_dim(), dim + 3 + HEIGHT_MAP_LEN);
-    let (a, _) = extended.reset(Some(3), ResetOptions::default()).unwrap();
-    let (b, _) = terrain.reset(Some(3), ResetOptions::default()).unwrap();
-    assert_eq!(a[..], b[..dim]);
+    // The paper's values and the wave's phase are the extended layout's; the goal and the velocity
+    // are the same world vectors in the rolled head frame (observation::rolled_frame): turned by
+    // its heading and, upside down, mirrored.
+    let n = 2 + 2 * 10;
+    let same = |a: &[f32], b: &[f32]| {
+        assert_eq!(a[..n], b[..n]);
+        assert_eq!(a[n + 6..dim], b[n + 6..dim]);
+        let mirror = if b[dim + 2] < 0.0 { -1.0 } else { 1.0 };
+        for at in [n, n + 4] {
+            let world = |v: &[f32], m: f32| {
+                let heading = (v[n + 2] as f64).atan2(v[n + 3] as f64);
+                ((v[at + 1] as f64).atan2((m * v[at]) as f64) + heading).rem_euclid(TAU)
+            };
+            let off = (world(a, 1.0) - world(b, mirror)).abs();
+            assert!(
+                off.min(TAU - off) < 1e-5,
+                "{:?} {:?}",
+                &a[n..n + 6],
+                &b[n..n + 6]
+            );
+            let norm = |v: &[f32]| (v[at] as f64).hypot(v[at + 1] as f64);
+            assert!((norm(a) - norm(b)).abs() < 1e-5 * norm(a).max(1.0));
+        }
+    };
+    let (a, _) = extended.reset(Some(6), ResetOptions::default()).unwrap();
+    let (b, _) = terrain.reset(Some(6), ResetOptions::default()).unwrap();
+    same(&a, &b);
     // Dropped upright: the world's up is the head's z axis.
     assert!(b[dim + 2] > 0.99, "{:?}", &b[dim..dim + 3]);
     let mut last = b;
-    for _ in 0..60 {
-        let sa = extended.step(&[0.0f32, -1.0, -1.0]).unwrap();
-        let sb = terrain.step(&[0.0f32, -1.0, -1.0]).unwrap();
-        assert_eq!(sa.obs[..], sb.obs[..dim]);
+    let mut upside_down = 0;
+    for k in 0..300 {
+        // A full wave, steered hard one way then the other: it rolls over on these hills.
+        let action = [if k % 120 < 60 { 1.0f32 } else { -1.0 }, 1.0, 1.0];
+        let sa = extended.step(&action).unwrap();
+        let sb = terrain.step(&action).unwrap();
+        same(&sa.obs, &sb.obs);
+        upside_down += usize::from(sb.obs[dim + 2] < 0.0);
         last = sb.obs;
     }
+    // The mirrored frame was checked too: this episode spends 132 of its 300 steps upside down.
+    assert!(
+        upside_down > 60,
+        "upside down in {upside_down} of 300 steps"
+    );
     let up = &last[dim..dim + 3];
     let norm = up.iter().map(|u| u * u).sum::<f32>().sqrt();
     assert!((norm - 1.0).abs() < 1e-5, "{up:?}");

@@ -5,7 +5,9 @@ trained agent must beat. ``snakesim evaluate baseline:steer --joints 10`` evalua
   steered: the paper's "sine wave" start, which goes wherever its drift takes it.
 - ``steer``: the same wave steered towards the goal, steering action ``clip(-bearing, -1, 1)`` with
   the goal's bearing in radians (0 ahead, positive to the left); the gain was chosen among 0.5, 1, 2
-  and 4 (x 0.5 rad) on 10 episodes per snake length, seeds 100-109.
+  and 4 (x 0.5 rad) on 10 episodes per snake length, seeds 100-109. On the terrain observation
+  the bearing is in its rolled head frame, mirrored while the body is upside down, so steer then
+  turns the right way (docs/tasks.md, "The head frame on hills").
 """
 
 from __future__ import annotations

@@ -46,7 +46,9 @@ class SnakeEnv(gymnasium.Env):
     the ground around the head (25 values, last): the ground's height minus the head's z at a 5 x 5
     grid of points 0.75 m apart, centred on the head and turned with its heading: five rows from
     1.5 m ahead to 1.5 m behind, each from 1.5 m to the right to 1.5 m to the left (docs/tasks.md,
-    "The terrain observation").
+    "The terrain observation"). Its goal vector, heading, velocity and map are in the rolled head
+    frame: the heading of the body's long axis, with left mirrored while the head is upside down,
+    so that rolling over on hills does not scramble them (upright and level, the extended frame).
 
     **Reward**: minus the planar head-goal distance (times ``reward["distance_weight"]``, 1); 100
     instead once the head is within ``goal_radius`` of the goal. Optional terms (``reward={...}``, off
