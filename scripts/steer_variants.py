@@ -1,9 +1,11 @@
 """Is a task's failure the ground's or the controller's? Runs ``baseline:steer`` with fixed gait
 settings (amplitude and frequency actions, steering gain) on the same episodes and counts, per
 episode, how many of the variants reach the goal (docs/tasks.md, "What did not work").
-Usage: steer_variants.py [EPISODES] [SEED] [TASK] [JOINTS] [--nudge]; TASK is goal, pegs or rough.
-``--nudge`` runs steer's own wave with its steering gain changed by 0.1 % steps instead (NUDGED):
-a task whose outcomes such a change flips is decided by chaos, not by the ground."""
+Usage: steer_variants.py [EPISODES] [SEED] [TASK] [JOINTS] [--nudge] [--rolled]; TASK is goal, pegs
+or rough. ``--nudge`` runs steer's own wave with its steering gain changed by 0.1 % steps instead
+(NUDGED): a task whose outcomes such a change flips is decided by chaos, not by the ground.
+``--rolled`` gives steer the terrain observation, whose goal bearing is in the rolled head frame
+(docs/tasks.md, "The head frame on hills"), instead of the extended one."""
 
 from __future__ import annotations
 
@@ -43,8 +45,10 @@ def steer(joints: int, amplitude: float, frequency: float, gain: float):
 
 
 def main() -> None:
-    args = [a for a in sys.argv[1:] if a != "--nudge"]
+    flags = {"--nudge", "--rolled"}
+    args = [a for a in sys.argv[1:] if a not in flags]
     variants = NUDGED if "--nudge" in sys.argv[1:] else VARIANTS
+    observation = "terrain" if "--rolled" in sys.argv[1:] else "extended"
     episodes = int(args[0]) if len(args) > 0 else 50
     seed = int(args[1]) if len(args) > 1 else 1000
     task = args[2] if len(args) > 2 else "rough"
@@ -52,7 +56,10 @@ def main() -> None:
     wins = []
     for amplitude, frequency, gain in variants:
         done = run_episodes(
-            steer(joints, amplitude, frequency, gain), {"task": task, "joints": joints}, episodes, seed
+            steer(joints, amplitude, frequency, gain),
+            {"task": task, "joints": joints, "observation": observation},
+            episodes,
+            seed,
         )
         wins.append([bool(e["success"]) for e in done])
         rate = np.mean(wins[-1])
