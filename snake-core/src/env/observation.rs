@@ -14,18 +14,20 @@ pub(crate) fn heading(base: &BaseState) -> f64 {
     (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
 }
 
-/// The terrain layout's head frame, which rolling does not scramble: its heading is that of the
-/// base's y axis (the body's long axis: rolling about it leaves it where it is) less a quarter
-/// turn, so that upright and level it equals [`heading`]; its second value is -1 when the head is
-/// upside down (its z axis below the horizontal) and +1 otherwise. The x axis that [`heading`]
-/// follows turns half a turn when the head rolls over and points up or down, with no heading at
-/// all, when it lies on its side, which it does again and again on hills; and upside down the yaw
-/// joints bend the other way, so the frame's left is mirrored to stay the side that a positive
-/// steering bends the body towards (docs/tasks.md, "The head frame on hills").
+/// The terrain layout's head frame, which rolling does not scramble: (heading, mirror). The heading
+/// is that of the base's y axis (the body's long axis, which rolling about it leaves in place) less
+/// a quarter turn, so that upright and level it equals [`heading`]; mirror is -1 while the head is
+/// upside down (its z axis below the horizontal) and +1 otherwise. Why not [`heading`]: the x axis
+/// it follows turns half a turn when the head rolls over, and lying on its side it points up or
+/// down and has no heading at all, which on hills happens again and again. Why mirror: upside
+/// down the yaw joints bend the body the other way for the same action, so the frame's left is
+/// mirrored to stay the side a positive steering bends towards (docs/tasks.md, "The head frame on
+/// hills").
 pub(crate) fn rolled_frame(base: &BaseState) -> (f64, f64) {
     let q = base.pose.orientation.quaternion().coords; // (x, y, z, w)
     let (x, y, z, w) = (q.x, q.y, q.z, q.w);
-    // The base's y axis in the world is (R01, R11, R21); the heading of x = (R11, -R01).
+    // The base's y axis in the world is (R01, R11, R21); a quarter turn back, (R11, -R01), it is
+    // where a level head's x axis would point.
     let (r01, r11) = (2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z));
     let r22 = 1.0 - 2.0 * (x * x + y * y);
     ((-r01).atan2(r11), if r22 < 0.0 { -1.0 } else { 1.0 })
