@@ -92,9 +92,9 @@ impl GroundProbe {
     /// Writes the map (`HEIGHT_MAP_LEN` values) for a head at `position` with planar heading `yaw`
     /// (see [`super::observation::rolled_frame`]): point (i, j), at index
     /// `i * HEIGHT_MAP_SIDE + j`, lies `(j - c) * HEIGHT_MAP_SPACING` along the head frame's x and
-    /// `(i - c) * HEIGHT_MAP_SPACING` along its y (c = the middle index; the head frame's -y points ahead and +x to the left, or
-    /// to the right when `mirror` is -1: the head upside down), and holds the ground's height there
-    /// minus the head's z.
+    /// `(i - c) * HEIGHT_MAP_SPACING` along its y (c = the middle index; the head frame's -y points
+    /// ahead and +x to the left, or to the right when `mirror` is -1: the head upside down), and
+    /// holds the ground's height there minus the head's z.
     pub fn write(&self, position: [f64; 3], yaw: f64, mirror: f64, out: &mut [f32]) {
         let (s, c) = yaw.sin_cos();
         let middle = (HEIGHT_MAP_SIDE / 2) as f64;
