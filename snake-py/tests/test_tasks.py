@@ -72,11 +72,10 @@ def test_the_terrain_observation_maps_the_drawn_ground_around_the_head():
     dim, n = extended.observation_space.shape[0], 2 + 2 * joints
     assert terrain.observation_space.shape == (dim + 3 + side * side,)
 
-    def check(a, b, goal):
+    def check(a, b, goal, world):
         # The paper's values and the wave's phase are the extended observation's, bit for bit.
         np.testing.assert_array_equal(a[:n], b[:n])
         np.testing.assert_array_equal(a[n + 6 :], b[n + 6 : dim])
-        world = json.loads(terrain.unwrapped._env.world_json())
         x, y = float(b[0]), float(b[1])
         up, grid = b[dim : dim + 3], b[dim + 3 :].reshape(side, side)
         # The head's rotation as pybullet computes it from the head's quaternion: its rows give the
@@ -106,11 +105,12 @@ def test_the_terrain_observation_maps_the_drawn_ground_around_the_head():
     # Seed 5, steered gently: upright after its first step, upside down by its 20th.
     extended.reset(seed=5)
     terrain.reset(seed=5)
+    world = json.loads(terrain.unwrapped._env.world_json())  # the episode's ground, drawn at reset
     mirrors = []
     for _ in range(20):
         a, *_ = extended.step(np.array([0.3, 0.0, 0.0], np.float32))
         b, _, _, _, info = terrain.step(np.array([0.3, 0.0, 0.0], np.float32))
-        mirrors.append(check(a, b, info["goal"]))
+        mirrors.append(check(a, b, info["goal"], world))
     assert mirrors[0] == 1.0 and mirrors[-1] == -1.0, mirrors
 
 
