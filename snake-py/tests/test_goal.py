@@ -183,3 +183,38 @@ def test_the_paper_10_agent_solves_the_papers_10_joint_task():
     assert "task" not in env and env["joints"] == 10 and env["preset"] == "snakebot-gym", env
     report = _evaluate(str(model), "--episodes", "4", "--seed", "777000")
     assert report["success_rate"] == 1.0, report
+
+
+def test_evaluation_lists_the_episodes_in_their_own_order():
+    """run_episodes' i-th episode is the same episode whatever the policy: env e of m is seeded with
+    seed + e and its later episodes continue its stream, as a Gymnasium env reset once with that seed
+    and then without one. Replayed here one by one through gymnasium.make with the steering
+    baseline, the episodes' lengths must come out in the listed order (they end in another)."""
+    from snakesim.agents.baselines import goal_bearing
+    from snakesim.agents.evaluation import run_episodes
+
+    joints, episodes, seed, envs = 5, 20, 77, 16
+
+    def steer(obs: np.ndarray) -> np.ndarray:
+        obs = np.atleast_2d(obs)
+        actions = np.zeros((len(obs), 3), dtype=np.float32)
+        actions[:, 0] = np.clip(-goal_bearing(obs, joints), -1.0, 1.0)
+        return actions
+
+    kwargs = {"task": "goal", "joints": joints}
+    listed = [e["steps"] for e in run_episodes(steer, kwargs, episodes, seed)]
+    expected = []
+    for e in range(envs):
+        env = gymnasium.make("snakesim/SnakeGoal-v0", joints=joints)
+        obs, _ = env.reset(seed=seed + e)
+        for k in range((episodes + e) // envs):
+            if k > 0:
+                obs, _ = env.reset()
+            steps, done = 0, False
+            while not done:
+                obs, _, terminated, truncated, _ = env.step(steer(obs)[0])
+                steps, done = steps + 1, terminated or truncated
+            expected.append(steps)
+        env.close()
+    assert listed == expected
+    assert sorted(listed) != listed  # the episodes end in another order than they are listed in

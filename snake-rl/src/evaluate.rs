@@ -180,7 +180,9 @@ pub fn run_episodes(
 
 /// The evaluation protocol for any actor: up to [`MAX_EVAL_ENVS`] envs, env `i` seeded with
 /// `seed + i`, env `i` contributing `(episodes + i) / m` episodes, each measured as [`Episode`]
-/// says. `episodes` must be at least 1.
+/// says. `episodes` must be at least 1. The episodes come back in their own order (env 0's in
+/// turn, then env 1's, ...), not in the order they end, so that the i-th episode of two policies'
+/// runs is the same episode (`scripts/win_overlap.py` compares them so).
 pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     act: &mut Actor<'_, A>,
     config: &EnvConfig,
@@ -206,6 +208,8 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     // The body's weight m g, for the cost of transport (the robot's links' masses for a robot).
     let weight = config.body_mass() * config.snake.gravity.abs();
     let mut done = Vec::with_capacity(episodes);
+    // Each episode's env and its number there: the episode's identity whatever the policy.
+    let mut order = Vec::with_capacity(episodes);
     while counts != targets {
         if stop() {
             return Err(EvalError::Interrupted);
@@ -222,6 +226,7 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
                 f64::from(f.observation[0] - info.start.x as f32),
                 f64::from(f.observation[1] - info.start.y as f32),
             );
+            order.push((f.env, counts[f.env]));
             done.push(Episode {
                 ret: info.episode_return,
                 steps: info.episode_step,
@@ -235,5 +240,9 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
             counts[f.env] += 1;
         }
     }
-    Ok(done)
+    // Episodes end in an order that depends on the policy; returned in the episodes' own order (env
+    // 0's first, second, ..., then env 1's), so that two policies' i-th episodes are the same one.
+    let mut done: Vec<(_, Episode)> = order.into_iter().zip(done).collect();
+    done.sort_by_key(|(key, _)| *key);
+    Ok(done.into_iter().map(|(_, e)| e).collect())
 }
