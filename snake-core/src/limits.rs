@@ -110,6 +110,9 @@ pub const MAX_TERRAIN_HEIGHT: f64 = 1.0e3;
 /// Most obstacles of one world, pegs included: each is a static body in Bullet's broadphase.
 pub const MAX_OBSTACLES: usize = 10_000;
 
+/// Most craters a rough ground may have (`terrain.rough.craters.count`).
+pub const MAX_CRATERS: usize = 16;
+
 /// Largest size of an obstacle (a half extent, radius or height), a grid spacing or a scale, metres.
 pub const MAX_OBSTACLE_SIZE: f64 = 1.0e3;
 

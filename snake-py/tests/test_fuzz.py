@@ -78,6 +78,7 @@ plausible = {
                     "hills_wavelength": 3.0,
                 }
             },
+            {"rough": {"craters": {"count": 2, "radius": 2.0, "depth": 1.0, "wall": 0.5}}},
         ]
     ),
     "world": st.sampled_from(

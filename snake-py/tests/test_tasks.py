@@ -200,3 +200,25 @@ def test_bad_input_is_one_line(capsys):
     with pytest.raises(SystemExit):
         cli_main(["evaluate", "baseline:steer", "--env", "mountains", "--episodes", "1"])
     assert "unknown task 'mountains'" in capsys.readouterr().err
+
+
+def test_a_crater_lies_across_the_line_to_the_goal_and_bad_craters_are_one_line():
+    """terrain.rough.craters (docs/tasks.md): on ground without bumps or hills, the straight line from
+    start to goal dips exactly the crater's depth (its flat bottom) and is flat near both ends (goals
+    10-12 m away leave room for the crater between start_clear and goal_clear)."""
+    flat = {"amplitude": 0.0, "hills_amplitude": 0.0}
+    env = snakesim.SnakeRoughEnv(
+        terrain={"rough": {**flat, "craters": {"count": 1}}}, goal_distribution={"distance": [10, 12]}
+    )
+    for seed in range(3):
+        _, info = env.reset(seed=seed)
+        world = json.loads(env._env.world_json())
+        (x0, y0), (x1, y1) = info["start"][:2], info["goal"]
+        line = [_ground(world, x0 + t * (x1 - x0), y0 + t * (y1 - y0)) for t in np.linspace(0, 1, 400)]
+        assert max(line) - min(line) == pytest.approx(2.5, abs=1e-5)
+        assert line[0] == pytest.approx(max(line), abs=1e-5) and line[-1] == pytest.approx(
+            max(line), abs=1e-5
+        )
+    with pytest.raises(ValueError, match=r"^terrain\.rough\.craters\.count") as error:
+        snakesim.SnakeRoughEnv(terrain={"rough": {"craters": {"count": 99}}})
+    assert "\n" not in str(error.value)

@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
 use crate::limits::{
-    check_range, MAX_HEIGHTFIELD_SAMPLES, MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES, MAX_OBSTACLE_SIZE,
-    MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
+    check_range, MAX_CRATERS, MAX_HEIGHTFIELD_SAMPLES, MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES,
+    MAX_OBSTACLE_SIZE, MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
 };
 use crate::math::StartPose;
 use crate::world_file::{rough_heights, Ground, Heightfield, Obstacle, ObstacleShape, WorldSpec};
@@ -91,6 +91,10 @@ pub struct RoughGround {
     pub spacing: f64,
     /// Ground beyond the start and the goal, metres (3.0).
     pub margin: f64,
+    /// Craters sunk into the ground across the straight line from the start to the goal
+    /// ([`Craters`]; `count` 0, the default: none, and left out when written).
+    #[serde(skip_serializing_if = "Craters::is_empty")]
+    pub craters: Craters,
     /// The ground's lateral friction, when given (`None`: Bullet's 0.5).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<f64>,
@@ -105,8 +109,155 @@ impl Default for RoughGround {
             hills_wavelength: 3.0,
             spacing: 0.125,
             margin: 3.0,
+            craters: Craters::default(),
             friction: None,
         }
+    }
+}
+
+/// Flat-bottomed round craters across the straight line from the start to the goal: each centre lies
+/// `along` metres from the start, uniform in [`start_clear + radius`, `distance - goal_clear -
+/// radius`] (the midpoint where that is empty), and `across` it, uniform in [-`offset`, `offset`];
+/// the ground inside `radius - wall` lies `depth` below the rough ground and rises over the `wall`
+/// (a smoothstep, steepest in its middle: `1.5 * depth / wall`). Where craters overlap the deeper
+/// wins. A crater wider than the body is a trap for a snake that crawls in: its walls are too steep
+/// to climb out (docs/tasks.md, "A crater in the way").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Craters {
+    /// How many craters (0).
+    pub count: usize,
+    /// Radius to the top of the wall, metres (3.0).
+    pub radius: f64,
+    /// Depth, metres (2.5).
+    pub depth: f64,
+    /// Width of the wall, metres (0.75).
+    pub wall: f64,
+    /// Largest distance of a centre from the straight line, metres (1.5).
+    pub offset: f64,
+    /// Ground free of craters around the start (the base: the cube snake's head), metres (3.0).
+    /// The body lies behind the head (5.1 m at 10 joints), so with the goal behind it the tail
+    /// may start on the crater's rim.
+    pub start_clear: f64,
+    /// Ground free of craters before the goal, metres (1.0).
+    pub goal_clear: f64,
+}
+
+impl Default for Craters {
+    fn default() -> Self {
+        Craters {
+            count: 0,
+            radius: 3.0,
+            depth: 2.5,
+            wall: 0.75,
+            offset: 1.5,
+            start_clear: 3.0,
+            goal_clear: 1.0,
+        }
+    }
+}
+
+impl Craters {
+    /// No crater.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.count > MAX_CRATERS {
+            return Err(invalid(format!(
+                "terrain.rough.craters.count must be at most {MAX_CRATERS}, got {}",
+                self.count
+            )));
+        }
+        size("terrain.rough.craters.radius", self.radius)?;
+        check_range(
+            "terrain.rough.craters.depth",
+            self.depth,
+            0.0,
+            MAX_TERRAIN_HEIGHT,
+        )?;
+        check_range("terrain.rough.craters.wall", self.wall, 0.0, self.radius)?;
+        for (what, v) in [
+            ("terrain.rough.craters.offset", self.offset),
+            ("terrain.rough.craters.start_clear", self.start_clear),
+            ("terrain.rough.craters.goal_clear", self.goal_clear),
+        ] {
+            check_range(what, v, 0.0, MAX_OBSTACLE_SIZE)?;
+        }
+        Ok(())
+    }
+
+    /// Sinks the craters into the `n` x `n` heights (sample (i, j) at index `j * n + i` lies at
+    /// ((i - c) * spacing, (j - c) * spacing), c = (n - 1) / 2: Bullet centres the grid on the
+    /// origin), drawing their centres from `rng`.
+    fn sink(
+        &self,
+        heights: &mut [f32],
+        n: usize,
+        spacing: f64,
+        start: &StartPose,
+        goal: (f64, f64),
+        rng: &mut ChaCha8Rng,
+    ) {
+        if self.is_empty() {
+            return;
+        }
+        let (distance, (ux, uy)) = line_to_goal(start, goal);
+        let (first, last) = (
+            self.start_clear + self.radius,
+            distance - self.goal_clear - self.radius,
+        );
+        let centres: Vec<(f64, f64)> = (0..self.count)
+            .map(|_| {
+                let along = if last > first {
+                    rng.gen_range(first..=last)
+                } else {
+                    0.5 * (first + last)
+                };
+                let across = rng.gen_range(-1.0..=1.0) * self.offset;
+                (
+                    start.x + along * ux - across * uy,
+                    start.y + along * uy + across * ux,
+                )
+            })
+            .collect();
+        let smooth = |t: f64| {
+            let t = t.clamp(0.0, 1.0);
+            t * t * (3.0 - 2.0 * t)
+        };
+        let c = 0.5 * (n - 1) as f64;
+        for j in 0..n {
+            let y = (j as f64 - c) * spacing;
+            for i in 0..n {
+                let x = (i as f64 - c) * spacing;
+                let sink = centres
+                    .iter()
+                    .map(|&(cx, cy)| {
+                        let r = (x - cx).hypot(y - cy);
+                        let rise = if self.wall > 0.0 {
+                            smooth((r - (self.radius - self.wall)) / self.wall)
+                        } else {
+                            f64::from(u8::from(r >= self.radius))
+                        };
+                        self.depth * (1.0 - rise)
+                    })
+                    .fold(0.0, f64::max);
+                heights[j * n + i] -= sink as f32;
+            }
+        }
+    }
+}
+
+/// The distance from the start to the goal and the unit vector towards it (-y, the start heading's
+/// ahead, when they coincide): the frame the pegs and the craters are laid out in.
+fn line_to_goal(start: &StartPose, goal: (f64, f64)) -> (f64, (f64, f64)) {
+    let (dx, dy) = (goal.0 - start.x, goal.1 - start.y);
+    let distance = dx.hypot(dy);
+    if distance > 0.0 {
+        (distance, (dx / distance, dy / distance))
+    } else {
+        (distance, (0.0, -1.0))
     }
 }
 
@@ -165,6 +316,7 @@ impl TerrainDistribution {
             size("terrain.rough.hills_wavelength", r.hills_wavelength)?;
             size("terrain.rough.spacing", r.spacing)?;
             check_range("terrain.rough.margin", r.margin, 0.0, MAX_OBSTACLE_SIZE)?;
+            r.craters.validate()?;
             friction("terrain.rough.friction", r.friction)?;
         }
         Ok(())
@@ -208,7 +360,13 @@ impl TerrainDistribution {
                 n,
                 r.spacing,
             );
-            let heights = a.iter().zip(&b).map(|(x, y)| x + y).collect();
+            let mut heights: Vec<f32> = a.iter().zip(&b).map(|(x, y)| x + y).collect();
+            // The craters draw from the hills' seed on a stream of its own: adding them moves no
+            // hill and no peg.
+            let mut crater_rng = ChaCha8Rng::seed_from_u64(hills);
+            crater_rng.set_stream(1);
+            r.craters
+                .sink(&mut heights, n, r.spacing, start, goal, &mut crater_rng);
             world.ground = Ground::Heightfield(Heightfield {
                 rows: n,
                 columns: n,
@@ -220,13 +378,7 @@ impl TerrainDistribution {
             }
         }
         if let Some(p) = &self.pegs {
-            let (dx, dy) = (goal.0 - start.x, goal.1 - start.y);
-            let distance = dx.hypot(dy);
-            let (ux, uy) = if distance > 0.0 {
-                (dx / distance, dy / distance)
-            } else {
-                (0.0, -1.0)
-            };
+            let (distance, (ux, uy)) = line_to_goal(start, goal);
             let end = distance - p.goal_clear;
             let along = if end >= p.start_clear {
                 ((end - p.start_clear) / p.spacing).floor() + 1.0
@@ -307,6 +459,53 @@ mod tests {
     }
 
     #[test]
+    fn a_crater_lies_across_the_straight_line_clear_of_start_and_goal() {
+        let craters = Craters {
+            count: 1,
+            ..Craters::default()
+        };
+        let t = TerrainDistribution {
+            pegs: None,
+            rough: Some(RoughGround {
+                amplitude: 0.0,
+                hills_amplitude: 0.0,
+                craters,
+                ..RoughGround::default()
+            }),
+        };
+        let start = StartPose {
+            x: 0.0,
+            y: 0.0,
+            z: 0.5,
+            yaw: 0.0,
+        };
+        for seed in 0..20 {
+            let w = t
+                .world(&WorldSpec::default(), &start, (0.0, -12.0), seed)
+                .unwrap();
+            let Ground::Heightfield(h) = &w.ground else {
+                panic!("rough ground expected")
+            };
+            let n = h.rows;
+            let c = (n - 1) / 2;
+            // The samples on the line x = 0, from the start (y = 0) to the goal (y = -12).
+            let on_line: Vec<(f64, f32)> = (0..=c)
+                .map(|k| (k as f64 * h.scale[1], h.heights[(c - k) * n + c]))
+                .filter(|&(d, _)| d <= 12.0)
+                .collect();
+            let deepest = on_line.iter().map(|&(_, z)| z).fold(f32::MAX, f32::min);
+            // The line crosses the crater's flat bottom: its centre is at most `offset` (1.5 m)
+            // off the line and the bottom reaches `radius - wall` (2.25 m) from it.
+            assert_eq!(deepest, -craters.depth as f32, "seed {seed}");
+            for &(d, z) in &on_line {
+                if d <= craters.start_clear || d >= 12.0 - craters.goal_clear {
+                    assert_eq!(z, 0.0, "seed {seed}: {z} m at {d} m along");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn bad_values_are_one_line_naming_the_field() {
         let mut t = TerrainDistribution {
             pegs: Some(PegField {
@@ -328,5 +527,30 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("terrain.pegs") && e.contains("obstacles"), "{e}");
+        for craters in [
+            Craters {
+                count: MAX_CRATERS + 1,
+                ..Craters::default()
+            },
+            Craters {
+                wall: 4.0,
+                ..Craters::default()
+            },
+            Craters {
+                depth: f64::NAN,
+                ..Craters::default()
+            },
+        ] {
+            let t = TerrainDistribution {
+                pegs: None,
+                rough: Some(RoughGround {
+                    craters,
+                    ..RoughGround::default()
+                }),
+            };
+            let e = t.validate().unwrap_err().to_string();
+            assert!(e.contains("terrain.rough.craters."), "{e}");
+            assert!(!e.contains('\n'));
+        }
     }
 }

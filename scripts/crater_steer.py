@@ -1,0 +1,58 @@
+"""A hand-made controller for snakesim/SnakeRough-v0 with a crater in the way (the env of
+snake-py/configs/rough-10-crater.yaml) that sees the ground: ``baseline:steer`` in the
+terrain observation's rolled head frame, except that where the height map shows a drop ahead (a
+crater's wall: a point up to 1.5 m ahead more than DROP below the head) it turns away from the deeper
+side until the way ahead is clear. It measures whether seeing the crater is enough, without learning,
+to go around it (docs/tasks.md, "A crater in the way").
+Usage: crater_steer.py [EPISODES] [SEED] [DROP]"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+from snakesim.agents.baselines import goal_bearing
+from snakesim.agents.evaluation import run_episodes, summarize
+from snakesim.runs import config as runconfig
+
+#: The crater attempt's run configuration, whose env this controller runs in.
+CONFIG = Path(__file__).resolve().parents[1] / "snake-py" / "configs" / "rough-10-crater.yaml"
+
+
+def crater_steer(joints: int, drop: float):
+    """``act(obs_batch)`` for the terrain observation of a ``joints``-joint cube snake."""
+    start = 2 + 2 * joints + 6 + 2 + 3  # the height map follows the extended values, phase and up
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        obs = np.atleast_2d(obs)
+        side = int(round((obs.shape[1] - start) ** 0.5))  # the map is the observation's square tail
+        c = side // 2
+        actions = np.zeros((len(obs), 3), dtype=np.float32)
+        actions[:, 0] = np.clip(-goal_bearing(obs, joints), -1.0, 1.0)
+        # Rows 0..c-1 lie ahead (the head frame's -y), columns above c to the left.
+        ahead = obs[:, start : start + side * side].reshape(-1, side, side)[:, :c, :]
+        left, right = ahead[:, :, c + 1 :].min(axis=(1, 2)), ahead[:, :, :c].min(axis=(1, 2))
+        blocked = ahead.min(axis=(1, 2)) < -drop
+        # Positive steering bends towards the left: turn away from the deeper side.
+        actions[blocked, 0] = np.where(left[blocked] < right[blocked], 1.0, -1.0)
+        return actions
+
+    return act
+
+
+def main() -> None:
+    args = sys.argv[1:]
+    episodes = int(args[0]) if len(args) > 0 else 100
+    seed = int(args[1]) if len(args) > 1 else 900000
+    drop = float(args[2]) if len(args) > 2 else 0.5
+    run = runconfig.load(CONFIG)
+    joints = run["joints"]
+    kwargs = {**run["env"], "joints": joints}
+    summary = summarize(run_episodes(crater_steer(joints, drop), kwargs, episodes, seed))
+    low, high = summary["success_rate_ci95"]
+    print(f"crater_steer (drop {drop} m): success {summary['success_rate']:.2f} ({low:.2f}-{high:.2f})")
+
+
+if __name__ == "__main__":
+    main()
