@@ -14,9 +14,10 @@ def run_episodes(act: Any, env_kwargs: Mapping[str, Any], episodes: int, seed: i
     snake-rl's ``evaluate::run_episodes_with`` (the native trainer's evaluations) does: up to 16
     episodes at once, env i seeded with ``seed + i`` (its later episodes continue its stream), so a
     seed gives the same episodes whatever the policy, listed in the episodes' order (env 0's, then env
-    1's, ...), not the order they end in, so two policies' i-th episodes are one episode. Each is a dict: ``ret``, ``steps``,
-    ``success``, ``seconds``, ``distance`` (m, start to end), ``path_length`` (m), ``work`` (J),
-    ``weight`` (N), ``speed`` (m/s), ``path_efficiency`` and ``cost_of_transport`` (None where undefined).
+    1's, ...), not the order they end in, so two policies' i-th episodes are one episode. Each is a
+    dict: ``ret``, ``steps``, ``success``, ``seconds``, ``distance`` (m, start to end), ``path_length``
+    (m), ``work`` (J), ``weight`` (N), ``speed`` (m/s), ``path_efficiency`` and ``cost_of_transport``
+    (None where undefined).
     """
     from snakesim import _core
     from snakesim.envs.config import action_array, env_config
