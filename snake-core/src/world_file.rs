@@ -568,6 +568,12 @@ impl PegsFile {
     }
 }
 
+/// The smoothstep weight `3 t^2 - 2 t^3` of `t` clamped to [0, 1].
+pub(crate) fn smoothstep(t: f64) -> f64 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
 /// Value noise on a lattice of `wavelength`: uniform values in [-1, 1] at lattice points (drawn row by
 /// row from `seed`), blended with the smoothstep weight, times `amplitude`. Only +, *, floor: the same
 /// bits on every platform.
@@ -583,14 +589,13 @@ pub fn rough_heights(
     let (lx, ly) = (lattice(rows), lattice(columns));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let values: Vec<f64> = (0..lx * ly).map(|_| rng.gen_range(-1.0..=1.0)).collect();
-    let smooth = |t: f64| t * t * (3.0 - 2.0 * t);
     let mut heights = Vec::with_capacity(rows * columns);
     for y in 0..columns {
         let v = y as f64 * spacing / wavelength;
-        let (j, fy) = (v.floor() as usize, smooth(v - v.floor()));
+        let (j, fy) = (v.floor() as usize, smoothstep(v - v.floor()));
         for x in 0..rows {
             let u = x as f64 * spacing / wavelength;
-            let (i, fx) = (u.floor() as usize, smooth(u - u.floor()));
+            let (i, fx) = (u.floor() as usize, smoothstep(u - u.floor()));
             let at = |i: usize, j: usize| values[j * lx + i];
             let bottom = at(i, j) + fx * (at(i + 1, j) - at(i, j));
             let top = at(i, j + 1) + fx * (at(i + 1, j + 1) - at(i, j + 1));

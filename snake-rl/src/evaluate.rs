@@ -207,9 +207,8 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     let mut actions = vec![A::default(); m * n];
     // The body's weight m g, for the cost of transport (the robot's links' masses for a robot).
     let weight = config.body_mass() * config.snake.gravity.abs();
+    // Each episode keyed by its env and its number there: its identity whatever the policy.
     let mut done = Vec::with_capacity(episodes);
-    // Each episode's env and its number there: the episode's identity whatever the policy.
-    let mut order = Vec::with_capacity(episodes);
     while counts != targets {
         if stop() {
             return Err(EvalError::Interrupted);
@@ -226,23 +225,25 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
                 f64::from(f.observation[0] - info.start.x as f32),
                 f64::from(f.observation[1] - info.start.y as f32),
             );
-            order.push((f.env, counts[f.env]));
-            done.push(Episode {
-                ret: info.episode_return,
-                steps: info.episode_step,
-                success: info.success,
-                seconds: info.episode_step as f64 * step_seconds,
-                distance: snake_core::env::python_hypot(dx, dy),
-                path_length: info.path_length,
-                work: info.work,
-                weight,
-            });
+            let key = (f.env, counts[f.env]);
+            done.push((
+                key,
+                Episode {
+                    ret: info.episode_return,
+                    steps: info.episode_step,
+                    success: info.success,
+                    seconds: info.episode_step as f64 * step_seconds,
+                    distance: snake_core::env::python_hypot(dx, dy),
+                    path_length: info.path_length,
+                    work: info.work,
+                    weight,
+                },
+            ));
             counts[f.env] += 1;
         }
     }
     // Episodes end in an order that depends on the policy; returned in the episodes' own order (env
     // 0's first, second, ..., then env 1's), so that two policies' i-th episodes are the same one.
-    let mut done: Vec<(_, Episode)> = order.into_iter().zip(done).collect();
     done.sort_by_key(|(key, _)| *key);
     Ok(done.into_iter().map(|(_, e)| e).collect())
 }

@@ -11,7 +11,9 @@ use crate::limits::{
     MAX_OBSTACLE_SIZE, MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
 };
 use crate::math::StartPose;
-use crate::world_file::{rough_heights, Ground, Heightfield, Obstacle, ObstacleShape, WorldSpec};
+use crate::world_file::{
+    rough_heights, smoothstep, Ground, Heightfield, Obstacle, ObstacleShape, WorldSpec,
+};
 
 /// What each episode's world adds to the env's world (or to the flat plane): a peg field, rough
 /// ground, or both. The env draws one `u64` from its episode stream after the goal and seeds the
@@ -222,10 +224,6 @@ impl Craters {
                 )
             })
             .collect();
-        let smooth = |t: f64| {
-            let t = t.clamp(0.0, 1.0);
-            t * t * (3.0 - 2.0 * t)
-        };
         let c = 0.5 * (n - 1) as f64;
         for j in 0..n {
             let y = (j as f64 - c) * spacing;
@@ -236,7 +234,7 @@ impl Craters {
                     .map(|&(cx, cy)| {
                         let r = (x - cx).hypot(y - cy);
                         let rise = if self.wall > 0.0 {
-                            smooth((r - (self.radius - self.wall)) / self.wall)
+                            smoothstep((r - (self.radius - self.wall)) / self.wall)
                         } else {
                             f64::from(u8::from(r >= self.radius))
                         };
