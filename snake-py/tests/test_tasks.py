@@ -161,6 +161,35 @@ def test_baseline_on_exactly_a_models_env(tmp_path, capsys):
         load_agent(str(tmp_path), task="pegs")
 
 
+def test_a_model_runs_in_the_env_it_was_trained_in_after_a_default_changes(tmp_path):
+    """A model's keywords resolve with today's defaults; where that differs from the env it recorded
+    at training (as after a change to a task's defaults), the recorded values are pinned, so the agent
+    and ``--env-from`` baselines still run the trained env."""
+    from safetensors import safe_open
+    from safetensors.numpy import load_file, save_file
+
+    source = ROOT / "models" / "goal-10.safetensors"
+    with safe_open(str(source), "np") as f:
+        meta = dict(f.metadata())
+    recorded = json.loads(meta["env_config"])
+    recorded["max_episode_steps"] = 700  # as if the goal task's 600 had been 700 when it trained
+    recorded["goal_distribution"]["distance"] = [4.0, 9.0]
+    model = tmp_path / "old-goal-10.safetensors"
+    save_file(load_file(str(source)), str(model), metadata={**meta, "env_config": json.dumps(recorded)})
+
+    kwargs = env_kwargs_of(model)
+    assert kwargs["max_episode_steps"] == 700 and kwargs["goal_distribution"] == {"distance": [4.0, 9.0]}
+    env = snakesim.envs.env.make_env(**kwargs)
+    assert env.config["max_episode_steps"] == 700
+    assert env.config["goal_distribution"]["distance"] == [4.0, 9.0]
+    assert load_agent("baseline:steer", env_from=str(model)).env_kwargs == load_agent(str(model)).env_kwargs
+
+    recorded["goal_radius"] = -1.0
+    save_file(load_file(str(source)), str(model), metadata={**meta, "env_config": json.dumps(recorded)})
+    with pytest.raises(AgentError, match="as it was trained: with its recorded values, .*goal_radius"):
+        load_agent(str(model))
+
+
 def _success(*args: str, tmp_path: Path) -> list[bool]:
     out = tmp_path / "e.json"
     cli_main(["evaluate", *args, "--episodes", "4", "--seed", "777000", "--json", str(out)])

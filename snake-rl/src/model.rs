@@ -12,7 +12,7 @@
 //! | `obs_dim`, `act_dim` | observation and action lengths |
 //! | `joints`, `preset` | the snake |
 //! | `env` | the run's env keywords (JSON), as `snakesim.SnakeEnv` takes them |
-//! | `env_config` | the complete resolved env configuration (JSON) |
+//! | `env_config` | the complete resolved env configuration (JSON); on loading, values the `env` keywords now resolve differently are pinned to it ([`pin_recorded_env`]) |
 //! | `observation` | the observation layout (`paper`, `extended`, `terrain`) |
 //! | `action` | the action layout: `N joint targets in [-1, 1] x action_scale rad, head to tail` |
 //! | `normalize` | `true` when observations are normalised with `obs_rms` (clip 10, eps 1e-8) |
@@ -400,14 +400,22 @@ impl<'a> Parsed<'a> {
         let mut env: Map<String, Value> = serde_json::from_str(self.meta("env")?)
             .map_err(|e| self.error(format!("metadata 'env' is not a JSON mapping ({e})")))?;
         find_env_files(&mut env, self.path);
-        let spec = EnvSpec {
+        let mut spec = EnvSpec {
             joints,
             preset,
             env,
         };
-        let config = spec
+        let mut config = spec
             .config()
             .map_err(|e| self.error(format!("its env does not build: {e}")))?;
+        if let Some(recorded) = self.meta.get("env_config") {
+            let recorded: Value = serde_json::from_str(recorded)
+                .ok()
+                .filter(Value::is_object)
+                .ok_or_else(|| self.error("metadata 'env_config' is not a JSON mapping"))?;
+            (spec, config) =
+                pin_recorded_env(spec, config, &recorded).map_err(|e| self.error(e))?;
+        }
         if (config.observation_dim(), config.action_dim()) != (obs_dim, act_dim) {
             return Err(self.error(format!(
                 "its env has {} observations and {} actions, but the network has {obs_dim} and {act_dim}",
@@ -451,6 +459,105 @@ impl<'a> Parsed<'a> {
 /// relative to the directory it ran in (the repository's root for the shipped models:
 /// `robots/yaw-pitch-16.yaml`).
 const ENV_FILE_KEYS: [&str; 2] = ["robot", "world"];
+
+/// The env a policy was trained in, exactly: its keywords resolve with today's defaults, so when a
+/// task's defaults change after training they would resolve to another env, and evaluations (and
+/// `--env-from`) would silently run that. Every value `recorded` (the resolved `env_config` written at
+/// training) holds that today's resolution differs in is pinned as a keyword; the pinned keywords
+/// must then build and resolve to the recorded values, or this is one line saying why not.
+///
+/// Robot and world files are compared by the keywords' paths (the recorded paths are the training
+/// directory's). Keys the recorded configuration lacks (fields added after it was written, and those
+/// written only when set, such as craters) are today's: new fields default to the old behaviour.
+fn pin_recorded_env(
+    spec: EnvSpec,
+    config: EnvConfig,
+    recorded: &Value,
+) -> Result<(EnvSpec, EnvConfig), String> {
+    let changes = recorded_changes(recorded, &config);
+    if changes.is_empty() {
+        return Ok((spec, config));
+    }
+    let mut env = Value::Object(spec.env.clone());
+    for (path, value) in &changes {
+        set_path(&mut env, path, value.clone());
+    }
+    let Value::Object(env) = env else {
+        unreachable!("keywords stay a mapping")
+    };
+    let pinned = EnvSpec { env, ..spec };
+    let first = |changes: &[(Vec<String>, Value)], now: &EnvConfig| {
+        let (path, trained) = &changes[0];
+        let now = lookup(
+            &serde_json::to_value(now).expect("EnvConfig serialises"),
+            path,
+        )
+        .map_or_else(|| "absent".to_owned(), Value::to_string);
+        format!(
+            "its env can no longer be built as it was trained: {} was {trained}, is now {now}",
+            path.join(".")
+        )
+    };
+    match pinned.config() {
+        Ok(c) if recorded_changes(recorded, &c).is_empty() => Ok((pinned, c)),
+        Ok(c) => Err(first(&recorded_changes(recorded, &c), &c)),
+        Err(e) => Err(format!(
+            "its env can no longer be built as it was trained: with its recorded values, {e}"
+        )),
+    }
+}
+
+/// The recorded leaves (path, recorded value) that `config` differs in; arrays are leaves, and the
+/// robot and world files and `snake.joints` (the `joints` key's) are left out.
+fn recorded_changes(recorded: &Value, config: &EnvConfig) -> Vec<(Vec<String>, Value)> {
+    fn walk(
+        recorded: &Value,
+        now: Option<&Value>,
+        path: &mut Vec<String>,
+        out: &mut Vec<(Vec<String>, Value)>,
+    ) {
+        match recorded {
+            Value::Object(fields) if !fields.is_empty() => {
+                for (key, value) in fields {
+                    let skip = (path.is_empty() && ENV_FILE_KEYS.contains(&key.as_str()))
+                        || (path.len() == 1 && path[0] == "snake" && key == "joints");
+                    if skip {
+                        continue;
+                    }
+                    path.push(key.clone());
+                    walk(value, now.and_then(|n| n.get(key)), path, out);
+                    path.pop();
+                }
+            }
+            _ if now == Some(recorded) => {}
+            _ => out.push((path.clone(), recorded.clone())),
+        }
+    }
+    let now = serde_json::to_value(config).expect("EnvConfig serialises");
+    let mut out = Vec::new();
+    walk(recorded, Some(&now), &mut Vec::new(), &mut out);
+    out
+}
+
+fn lookup<'a>(value: &'a Value, path: &[String]) -> Option<&'a Value> {
+    path.iter().try_fold(value, |v, key| v.get(key))
+}
+
+/// Sets `value` at `path`, making mappings on the way (replacing anything else there).
+fn set_path(target: &mut Value, path: &[String], value: Value) {
+    let Some((last, parents)) = path.split_last() else {
+        *target = value;
+        return;
+    };
+    let mut at = target;
+    for key in parents {
+        if !at.get(key).is_some_and(Value::is_object) {
+            at[key.as_str()] = Value::Object(Map::new());
+        }
+        at = &mut at[key.as_str()];
+    }
+    at[last.as_str()] = value;
+}
 
 /// Makes a model usable from any directory: a relative robot or world path that does not exist from
 /// here is looked up from the model's directory and the one above it (`models/` and `robots/` sit side
@@ -532,4 +639,116 @@ pub fn parse_checkpoint(path: &Path, bytes: &[u8]) -> Result<Checkpoint, ModelEr
         reason: p.meta("reason")?.to_owned(),
         policy,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn models() -> Vec<std::path::PathBuf> {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
+        let mut found: Vec<_> = std::fs::read_dir(&dir)
+            .expect("models/ is beside snake-rl")
+            .map(|e| e.expect("readable").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "safetensors"))
+            .collect();
+        found.sort();
+        found
+    }
+
+    fn meta_of(path: &Path) -> HashMap<String, String> {
+        let bytes = std::fs::read(path).expect("readable");
+        let (_, meta) = SafeTensors::read_metadata(&bytes).expect("a safetensors file");
+        meta.metadata().clone().expect("metadata")
+    }
+
+    /// Every shipped model's keywords resolve today to exactly the env it was trained in (its
+    /// recorded `env_config`, every key, both ways), so loading it pins nothing. A change to a task's
+    /// defaults that would move a shipped model's env fails here.
+    #[test]
+    fn shipped_models_resolve_to_the_env_they_were_trained_in() {
+        let found = models();
+        assert!(found.len() >= 7, "{found:?}");
+        for path in found {
+            let meta = meta_of(&path);
+            let policy = load_policy(&path).unwrap();
+            let keywords: Map<String, Value> = serde_json::from_str(&meta["env"]).unwrap();
+            let mut recorded: Value = serde_json::from_str(&meta["env_config"]).unwrap();
+            let mut now = serde_json::to_value(policy.env.config().unwrap()).unwrap();
+            for key in ENV_FILE_KEYS {
+                assert_eq!(
+                    recorded.get(key).is_some(),
+                    keywords.contains_key(key),
+                    "{path:?} {key}"
+                );
+                recorded.as_object_mut().unwrap().remove(key);
+                now.as_object_mut().unwrap().remove(key);
+            }
+            assert_eq!(recorded, now, "{path:?}");
+            let mut loaded = policy.env.env.clone();
+            for key in ENV_FILE_KEYS {
+                assert_eq!(loaded.remove(key).is_some(), keywords.contains_key(key));
+            }
+            let unfiled: Map<String, Value> = keywords
+                .into_iter()
+                .filter(|(k, _)| !ENV_FILE_KEYS.contains(&k.as_str()))
+                .collect();
+            assert_eq!(loaded, unfiled, "{path:?}: nothing pinned");
+        }
+    }
+
+    /// A model whose recorded env differs from what its keywords give today.
+    fn with_recorded(change: impl Fn(&mut Value)) -> Result<SavedPolicy, ModelError> {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/goal-10.safetensors");
+        let (entries, mut meta) = policy_entries(&load_policy(&path).unwrap());
+        let mut recorded: Value = serde_json::from_str(&meta["env_config"]).unwrap();
+        change(&mut recorded);
+        meta.insert("env_config".into(), recorded.to_string());
+        parse_policy(&path, &serialize(&entries, meta))
+    }
+
+    #[test]
+    fn a_changed_default_is_pinned_to_the_recorded_value() {
+        let p = with_recorded(|r| {
+            r["max_episode_steps"] = 700.into();
+            r["reward"]["energy_weight"] = 0.25.into();
+            r["goal_distribution"]["distance"] = serde_json::json!([4.0, 9.0]);
+        })
+        .unwrap();
+        assert_eq!(
+            Value::Object(p.env.env.clone()),
+            serde_json::json!({
+                "task": "goal",
+                "max_episode_steps": 700,
+                "reward": {"energy_weight": 0.25},
+                "goal_distribution": {"distance": [4.0, 9.0]},
+            })
+        );
+        let c = p.env.config().unwrap();
+        assert_eq!(c.max_episode_steps, 700);
+        assert_eq!(c.reward.energy_weight, 0.25);
+        assert_eq!(c.goal_distribution.unwrap().distance, [4.0, 9.0]);
+        // The keywords' other values are today's (the recorded ones are the same).
+        assert_eq!(c.goal_radius, 1.0);
+    }
+
+    #[test]
+    fn an_env_that_cannot_be_rebuilt_is_one_line() {
+        let e = with_recorded(|r| r["goal_radius"] = (-1.0).into()).unwrap_err();
+        assert!(
+            e.0.contains("goal-10.safetensors: its env can no longer be built as it was trained: with its recorded values, "),
+            "{e}"
+        );
+        assert!(e.0.contains("goal_radius"), "{e}");
+        let e = with_recorded(|r| r["reward"]["no_such_term"] = 1.0.into()).unwrap_err();
+        assert!(
+            e.0.contains("with its recorded values, env.reward.no_such_term: unknown field"),
+            "{e}"
+        );
+        let e = with_recorded(|r| *r = Value::Null).unwrap_err();
+        assert!(
+            e.0.ends_with("metadata 'env_config' is not a JSON mapping"),
+            "{e}"
+        );
+    }
 }
