@@ -26,7 +26,7 @@ pub use height_map::{HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING};
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
-pub use terrain::{PegField, RoughGround, TerrainDistribution};
+pub use terrain::{Craters, Floor, Layout, PegField, RoughGround, TerrainDistribution};
 pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
@@ -271,6 +271,9 @@ pub struct SnakeEnv {
     /// Half the extent along x and y of the rough ground that [`EnvConfig::terrain`] laid out: the
     /// episode ends (terminated, unsuccessful) once the head is beyond it, falling off the world.
     ground_edge: Option<(f64, f64)>,
+    /// Craters' floors that end the episode (terminated, unsuccessful) once the head is over one
+    /// (`terrain.rough.craters.terminate`).
+    end_floors: Vec<terrain::Floor>,
 }
 
 impl SnakeEnv {
@@ -315,6 +318,7 @@ impl SnakeEnv {
             episode_world: None,
             ground: height_map::GroundProbe::Plane,
             ground_edge: None,
+            end_floors: Vec::new(),
         })
     }
 
@@ -447,11 +451,14 @@ impl SnakeEnv {
         // Random terrain takes one more number, after the goal's (none without it).
         let mut start = start;
         self.episode_world = None;
+        self.end_floors.clear();
         let laid_out;
         if let Some(terrain) = &self.config.terrain {
             let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
             let seed = rng.gen::<u64>();
-            laid_out = terrain.world(world, &start, goal, seed)?;
+            let layout = terrain.layout(world, &start, goal, seed)?;
+            self.end_floors = layout.end_floors;
+            laid_out = layout.world;
             world = &laid_out;
             if terrain.rough.is_some() && options.start.is_none() {
                 start.z += world.ground_top(TERRAIN_START_REACH);
@@ -573,7 +580,8 @@ impl SnakeEnv {
         let off_ground = self
             .ground_edge
             .is_some_and(|(hx, hy)| p.0.abs() > hx || p.1.abs() > hy);
-        let terminated = success || off_ground;
+        let in_crater = self.end_floors.iter().any(|f| f.contains(p.0, p.1));
+        let terminated = success || off_ground || in_crater;
         let truncated = self.episode_step >= self.config.max_episode_steps;
         if terminated || truncated {
             self.phase = Phase::Done;

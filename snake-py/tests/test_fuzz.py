@@ -79,6 +79,7 @@ plausible = {
                 }
             },
             {"rough": {"craters": {"count": 2, "radius": 2.0, "depth": 1.0, "wall": 0.5}}},
+            {"rough": {"craters": {"count": 1, "terminate": True}}},
         ]
     ),
     "world": st.sampled_from(

@@ -55,6 +55,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "paper-tuned-5",
         "pegs-10",
         "rough-10-blind",
+        "rough-10-crater-end",
         "rough-10-crater",
         "rough-10",
     ]

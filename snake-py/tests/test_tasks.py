@@ -251,3 +251,29 @@ def test_a_crater_lies_across_the_line_to_the_goal_and_bad_craters_are_one_line(
     with pytest.raises(ValueError, match=r"^terrain\.rough\.craters\.count") as error:
         snakesim.SnakeRoughEnv(terrain={"rough": {"craters": {"count": 99}}})
     assert "\n" not in str(error.value)
+
+
+def test_a_crater_with_terminate_ends_the_episode_over_its_floor():
+    """terrain.rough.craters.terminate: the unsteered wave, started facing the goal 12 m ahead across
+    flat ground, crawls into the crater and the episode ends (terminated, unsuccessful) on the first
+    step whose head is within radius - wall of the crater's centre (read from the episode's world)."""
+    flat = {"amplitude": 0.0, "hills_amplitude": 0.0}
+    craters = {"count": 1, "offset": 0.0, "terminate": True}
+    env = snakesim.SnakeRoughEnv(
+        joints=10, terrain={"rough": {**flat, "craters": craters}}, max_episode_steps=600
+    )
+    # Bullet puts the grid's z = 0 halfway between its lowest and highest sample: the ground is 1.25 m up.
+    env.reset(seed=1, options={"start": (0.0, 0.0, 1.75, 0.0), "goal": (0.0, -12.0)})
+    world = json.loads(env._env.world_json())
+    points = np.asarray(world["ground"]["points"]).reshape(-1, 3)
+    floor = points[points[:, 2] < points[:, 2].min() + 1e-6]  # the flat bottom's grid points
+    centre, radius = floor[:, :2].mean(axis=0), 3.0 - 0.75  # radius - wall at the defaults
+    assert centre[0] == pytest.approx(0.0, abs=0.01) and -8.0 <= centre[1] <= -6.0
+    heads = []
+    while True:
+        _, _, terminated, truncated, info = env.step(np.zeros(3, dtype=np.float32))
+        heads.append(np.hypot(*(np.asarray(env.cube_poses()[0][:2]) - centre)))
+        if terminated or truncated:
+            break
+    assert terminated and not info["success"]
+    assert heads[-1] < radius and min(heads[:-1]) > radius, heads[-3:]

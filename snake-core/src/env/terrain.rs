@@ -123,7 +123,8 @@ impl Default for RoughGround {
 /// the ground inside `radius - wall` lies `depth` below the rough ground and rises over the `wall`
 /// (a smoothstep, steepest in its middle: `1.5 * depth / wall`). Where craters overlap the deeper
 /// wins. A crater wider than the body is a trap for a snake that crawls in: its walls are too steep
-/// to climb out (docs/tasks.md, "A crater in the way").
+/// to climb out (docs/tasks.md, "A crater in the way"). With `terminate`, an episode ends there
+/// (terminated, unsuccessful) as soon as the head is over a crater's floor.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Craters {
@@ -143,6 +144,10 @@ pub struct Craters {
     pub start_clear: f64,
     /// Ground free of craters before the goal, metres (1.0).
     pub goal_clear: f64,
+    /// End the episode (terminated, unsuccessful) once the head is over a crater's floor, within
+    /// `radius - wall` of its centre (false: the snake may climb out again). Left out when false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub terminate: bool,
 }
 
 impl Default for Craters {
@@ -155,6 +160,7 @@ impl Default for Craters {
             offset: 1.5,
             start_clear: 3.0,
             goal_clear: 1.0,
+            terminate: false,
         }
     }
 }
@@ -192,7 +198,7 @@ impl Craters {
 
     /// Sinks the craters into the `n` x `n` heights (sample (i, j) at index `j * n + i` lies at
     /// ((i - c) * spacing, (j - c) * spacing), c = (n - 1) / 2: Bullet centres the grid on the
-    /// origin), drawing their centres from `rng`.
+    /// origin), drawing their centres from `rng`; returns the centres.
     fn sink(
         &self,
         heights: &mut [f32],
@@ -201,9 +207,9 @@ impl Craters {
         start: &StartPose,
         goal: (f64, f64),
         rng: &mut ChaCha8Rng,
-    ) {
+    ) -> Vec<(f64, f64)> {
         if self.is_empty() {
-            return;
+            return Vec::new();
         }
         let (distance, (ux, uy)) = line_to_goal(start, goal);
         let (first, last) = (
@@ -244,6 +250,7 @@ impl Craters {
                 heights[j * n + i] -= sink as f32;
             }
         }
+        centres
     }
 }
 
@@ -329,8 +336,20 @@ impl TerrainDistribution {
         goal: (f64, f64),
         seed: u64,
     ) -> Result<WorldSpec> {
+        self.layout(base, start, goal, seed).map(|l| l.world)
+    }
+
+    /// [`TerrainDistribution::world`], with the floors an episode ends on.
+    pub fn layout(
+        &self,
+        base: &WorldSpec,
+        start: &StartPose,
+        goal: (f64, f64),
+        seed: u64,
+    ) -> Result<Layout> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut world = base.clone();
+        let mut end_floors = Vec::new();
         if let Some(r) = &self.rough {
             // The lattice seeds first, so that the pegs' draws do not move them.
             let (bumps, hills) = (rng.gen::<u64>(), rng.gen::<u64>());
@@ -363,8 +382,17 @@ impl TerrainDistribution {
             // hill and no peg.
             let mut crater_rng = ChaCha8Rng::seed_from_u64(hills);
             crater_rng.set_stream(1);
-            r.craters
+            let centres = r
+                .craters
                 .sink(&mut heights, n, r.spacing, start, goal, &mut crater_rng);
+            if r.craters.terminate {
+                let floor = r.craters.radius - r.craters.wall;
+                end_floors.extend(centres.into_iter().map(|(x, y)| Floor {
+                    x,
+                    y,
+                    radius: floor,
+                }));
+            }
             world.ground = Ground::Heightfield(Heightfield {
                 rows: n,
                 columns: n,
@@ -415,7 +443,34 @@ impl TerrainDistribution {
                 }
             }
         }
-        Ok(world)
+        Ok(Layout { world, end_floors })
+    }
+}
+
+/// An episode's terrain: its world, and the crater floors on which it ends.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    /// The world (ground, obstacles).
+    pub world: WorldSpec,
+    /// The floors of craters with `terminate` (none otherwise).
+    pub end_floors: Vec<Floor>,
+}
+
+/// A round floor: centre (x, y) and radius, metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Floor {
+    /// Centre x.
+    pub x: f64,
+    /// Centre y.
+    pub y: f64,
+    /// Radius.
+    pub radius: f64,
+}
+
+impl Floor {
+    /// (x, y) lies on the floor.
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        (x - self.x).hypot(y - self.y) < self.radius
     }
 }
 

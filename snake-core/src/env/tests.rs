@@ -760,3 +760,59 @@ fn the_rough_task_ends_an_episode_whose_head_leaves_the_ground() {
     }
     panic!("the episode did not end");
 }
+
+#[test]
+fn a_crater_that_terminates_ends_the_episode_once_the_head_is_over_its_floor() {
+    // Flat ground, one crater across the line to a goal 12 m ahead (-y): its centre 6-8 m ahead,
+    // on the line. The unsteered wave crawls ahead into it.
+    let run = |terminate: bool| {
+        let mut config = EnvConfig::rough_task(Preset::Paper, 10);
+        let rough = config.terrain.as_mut().unwrap().rough.as_mut().unwrap();
+        (rough.amplitude, rough.hills_amplitude) = (0.0, 0.0);
+        rough.craters = Craters {
+            count: 1,
+            offset: 0.0,
+            terminate,
+            ..Craters::default()
+        };
+        config.max_episode_steps = 600;
+        let mut e = env(config);
+        let options = ResetOptions {
+            start: Some(StartPose {
+                x: 0.0,
+                y: 0.0,
+                // Bullet puts the grid's z = 0 halfway between its lowest and highest sample: the
+                // flat ground lies 1.25 m up (half the crater's depth).
+                z: 1.75,
+                yaw: 0.0,
+            }),
+            goal: Some((0.0, -12.0)),
+        };
+        e.reset(Some(1), options).unwrap();
+        let floors = e.end_floors.clone();
+        let mut heads = Vec::new();
+        for _ in 0..600 {
+            let s = e.step(&[0.0f32, 0.0, 0.0]).unwrap();
+            heads.push(e.position);
+            if s.terminated || s.truncated {
+                return (floors, heads, s.terminated, s.info.success);
+            }
+        }
+        unreachable!("600 steps truncate")
+    };
+    let (floors, heads, terminated, success) = run(true);
+    assert_eq!(floors.len(), 1);
+    let f = floors[0];
+    assert!(
+        f.x == 0.0 && (-8.0..=-6.0).contains(&f.y) && f.radius == 2.25,
+        "{f:?}"
+    );
+    let (last, before) = (heads[heads.len() - 1], &heads[..heads.len() - 1]);
+    assert!(terminated && !success, "{:?} {f:?}", heads.last());
+    assert!(f.contains(last.0, last.1), "{last:?} {f:?}");
+    assert!(before.iter().all(|h| !f.contains(h.0, h.1)));
+    // Without `terminate` the same episode goes on over the floor.
+    let (floors, heads_on, terminated, _) = run(false);
+    assert!(floors.is_empty() && !terminated);
+    assert_eq!(&heads_on[..heads.len()], &heads[..]);
+}

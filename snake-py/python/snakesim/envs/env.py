@@ -359,8 +359,9 @@ class SnakeRoughEnv(SnakeGoalEnv):
       ``hills_wavelength`` 3 m), value noise sampled every ``spacing`` 0.125 m over a square reaching
       ``margin`` 3 m beyond start and goal; Bullet's ground friction 0.5. A drawn start is raised by
       the ground's highest point within 1.5 m of the origin. No crater by default; ``{"rough":
-      {"craters": {"count": 1}}}`` sinks one across the straight line to the goal (docs/tasks.md,
-      "A crater in the way").
+      {"craters": {"count": 1}}}`` sinks one across the straight line to the goal, and
+      ``"terminate": True`` among its keys ends an episode once the head is over its floor
+      (docs/tasks.md, "A crater in the way").
     - **Episode end**: the goal reached (terminated) or 900 env steps, 30 s (truncated); the head
       beyond the edge of the ground's square, falling off the world, ends it too (terminated,
       ``info["success"]`` False).
