@@ -26,7 +26,9 @@ pub use height_map::{HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING};
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
-pub use terrain::{Craters, Floor, Layout, PegField, RoughGround, TerrainDistribution};
+pub use terrain::{
+    route_distance, Craters, Disc, Layout, PegField, RoughGround, TerrainDistribution,
+};
 pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
@@ -273,7 +275,11 @@ pub struct SnakeEnv {
     ground_edge: Option<(f64, f64)>,
     /// Craters' floors that end the episode (terminated, unsuccessful) once the head is over one
     /// (`terrain.rough.craters.terminate`).
-    end_floors: Vec<terrain::Floor>,
+    end_floors: Vec<Disc>,
+    /// The craters the progress term measures its way around (`reward.progress_around_craters`).
+    route_around: Vec<Disc>,
+    /// The distance the progress term measured after the latest step or reset.
+    progress_distance: f64,
 }
 
 impl SnakeEnv {
@@ -319,6 +325,8 @@ impl SnakeEnv {
             ground: height_map::GroundProbe::Plane,
             ground_edge: None,
             end_floors: Vec::new(),
+            route_around: Vec::new(),
+            progress_distance: 0.0,
         })
     }
 
@@ -452,12 +460,27 @@ impl SnakeEnv {
         let mut start = start;
         self.episode_world = None;
         self.end_floors.clear();
+        self.route_around.clear();
         let laid_out;
         if let Some(terrain) = &self.config.terrain {
             let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
             let seed = rng.gen::<u64>();
             let layout = terrain.layout(world, &start, goal, seed)?;
-            self.end_floors = layout.end_floors;
+            if let Some(c) = terrain.rough.as_ref().map(|r| r.craters) {
+                if c.terminate {
+                    self.end_floors = layout
+                        .craters
+                        .iter()
+                        .map(|d| Disc {
+                            radius: c.radius - c.wall,
+                            ..*d
+                        })
+                        .collect();
+                }
+            }
+            if self.config.reward.progress_around_craters {
+                self.route_around = layout.craters;
+            }
             laid_out = layout.world;
             world = &laid_out;
             if terrain.rough.is_some() && options.start.is_none() {
@@ -510,6 +533,7 @@ impl SnakeEnv {
             obs[1],
             self.config.reward.distance_precision,
         );
+        self.progress_distance = self.progress_distance_at(self.origin);
         self.snake = Some(body);
         self.episode_world = keep;
         self.phase = Phase::Running;
@@ -553,12 +577,19 @@ impl SnakeEnv {
         let weights = self.config.reward;
         let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
         let success = distance < self.config.goal_radius;
+        let progress_distance = if self.route_around.is_empty() {
+            distance
+        } else {
+            self.progress_distance_at(p)
+        };
         let terms = RewardTerms::compute(
             &weights,
             &RewardInputs {
                 success,
                 distance,
                 previous_distance: self.distance,
+                progress_distance,
+                previous_progress_distance: self.progress_distance,
                 action: self.driver.action(),
                 previous_action: &self.previous_action,
                 work,
@@ -566,6 +597,7 @@ impl SnakeEnv {
         );
         self.previous_action.copy_from_slice(self.driver.action());
         self.distance = distance;
+        self.progress_distance = progress_distance;
         let reward = terms.total(&weights);
         // The limits keep these finite; if physics ever drifts out of float32's range anyway, it is
         // an error, never an inf handed to a learner.
@@ -592,6 +624,16 @@ impl SnakeEnv {
             truncated,
             info: self.info(terms, success),
         })
+    }
+
+    /// The distance the progress term measures with the base at `p`: the straight one (the
+    /// latest [`SnakeEnv::distance`]) unless it goes around craters.
+    fn progress_distance_at(&self, p: (f64, f64)) -> f64 {
+        if self.route_around.is_empty() {
+            self.distance
+        } else {
+            route_distance(p, self.goal, &self.route_around)
+        }
     }
 
     /// A step may run: an episode is running, `obs` has the observation's length and `action` one

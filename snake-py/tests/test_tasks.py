@@ -277,3 +277,36 @@ def test_a_crater_with_terminate_ends_the_episode_over_its_floor():
             break
     assert terminated and not info["success"]
     assert heads[-1] < radius and min(heads[:-1]) > radius, heads[-3:]
+
+
+def test_progress_around_craters_changes_progress_only_where_a_crater_is_in_the_way():
+    """reward.progress_around_craters (docs/tasks.md): without craters the rewards are the same bits as
+    without the option; with one in the way, the unsteered wave that crawls into it has earned
+    metres less progress, while in it, than the straight distance it gained."""
+
+    def rewards(progress_around: bool, craters: dict | None) -> tuple[list[float], float]:
+        rough = {"amplitude": 0.0, "hills_amplitude": 0.0, **({"craters": craters} if craters else {})}
+        env = snakesim.SnakeRoughEnv(
+            joints=10, terrain={"rough": rough}, reward={"progress_around_craters": progress_around}
+        )
+        z = 1.75 if craters else 0.5  # a crater's ground lies half its depth (2.5 m) up
+        _, info = env.reset(seed=1, options={"start": (0.0, 0.0, z, 0.0), "goal": (0.0, -12.0)})
+        start = info["distance"]
+        out = []
+        for _ in range(450):
+            _, reward, terminated, truncated, info = env.step(np.zeros(3, dtype=np.float32))
+            out.append(reward)
+            assert not (terminated or truncated)
+        return out, start - info["distance"]
+
+    assert rewards(True, None) == rewards(False, None)
+    crater = {"count": 1, "offset": 0.0}
+    straight, gained = rewards(False, crater)
+    around, _ = rewards(True, crater)
+    assert sum(straight) == pytest.approx(gained, abs=1e-4)  # float32 positions
+    # Cumulative progress: once in the crater the way out and around is metres longer than the
+    # straight line from there, so the progress earned so far falls metres behind the straight one.
+    assert min(np.cumsum(around) - np.cumsum(straight)) < -2.0
+    with pytest.raises(TypeError, match="^reward.progress_around_craters: invalid type") as error:
+        snakesim.SnakeRoughEnv(reward={"progress_around_craters": 1.5})
+    assert "\n" not in str(error.value)

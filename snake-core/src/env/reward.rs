@@ -152,6 +152,8 @@ pub struct RewardTerms {
     /// or the success reward (100) on the step that ends within the goal radius.
     pub goal: f64,
     /// `progress_weight * (previous distance - distance)`: positive when the base approached the goal.
+    /// With `progress_around_craters` the distances are measured along the shortest way around the
+    /// craters (`snake_core::route_distance`).
     pub progress: f64,
     /// `-smoothness_weight * sum_i (a_i - previous a_i)^2` over the action clipped to [-1, 1] (in the
     /// `joints` mode with `action_scale` 1, the joint targets in radians); the previous action of an
@@ -171,6 +173,11 @@ pub struct RewardInputs<'a> {
     pub distance: f64,
     /// Distance to the goal before the step.
     pub previous_distance: f64,
+    /// The distance the progress term measures after the step: `distance`, or with
+    /// `progress_around_craters` the way around the craters.
+    pub progress_distance: f64,
+    /// The same before the step.
+    pub previous_progress_distance: f64,
     /// The step's action, clipped to [-1, 1].
     pub action: &'a [f64],
     /// The previous step's (zeros on an episode's first step).
@@ -192,7 +199,8 @@ impl RewardTerms {
             ..RewardTerms::default()
         };
         if weights.progress_weight != 0.0 {
-            terms.progress = weights.progress_weight * (step.previous_distance - step.distance);
+            terms.progress = weights.progress_weight
+                * (step.previous_progress_distance - step.progress_distance);
         }
         if weights.smoothness_weight != 0.0 {
             let change: f64 = step
@@ -241,6 +249,11 @@ pub struct RewardConfig {
     pub success_reward: f64,
     /// Precision of the goal-minus-position differences (see [`DistancePrecision`]).
     pub distance_precision: DistancePrecision,
+    /// The progress term measures the distance along the shortest way around the rough ground's
+    /// craters (each a disc of the crater's radius; `snake_core::route_distance`) instead of the
+    /// straight line (false; left out when false). Success is still judged by the straight line.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub progress_around_craters: bool,
 }
 
 impl Default for RewardConfig {
@@ -252,6 +265,7 @@ impl Default for RewardConfig {
             energy_weight: 0.0,
             success_reward: 100.0,
             distance_precision: DistancePrecision::Float32,
+            progress_around_craters: false,
         }
     }
 }

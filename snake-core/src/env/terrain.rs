@@ -339,7 +339,7 @@ impl TerrainDistribution {
         self.layout(base, start, goal, seed).map(|l| l.world)
     }
 
-    /// [`TerrainDistribution::world`], with the floors an episode ends on.
+    /// [`TerrainDistribution::world`], with its craters.
     pub fn layout(
         &self,
         base: &WorldSpec,
@@ -349,7 +349,7 @@ impl TerrainDistribution {
     ) -> Result<Layout> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut world = base.clone();
-        let mut end_floors = Vec::new();
+        let mut craters = Vec::new();
         if let Some(r) = &self.rough {
             // The lattice seeds first, so that the pegs' draws do not move them.
             let (bumps, hills) = (rng.gen::<u64>(), rng.gen::<u64>());
@@ -385,14 +385,11 @@ impl TerrainDistribution {
             let centres = r
                 .craters
                 .sink(&mut heights, n, r.spacing, start, goal, &mut crater_rng);
-            if r.craters.terminate {
-                let floor = r.craters.radius - r.craters.wall;
-                end_floors.extend(centres.into_iter().map(|(x, y)| Floor {
-                    x,
-                    y,
-                    radius: floor,
-                }));
-            }
+            craters.extend(centres.into_iter().map(|(x, y)| Disc {
+                x,
+                y,
+                radius: r.craters.radius,
+            }));
             world.ground = Ground::Heightfield(Heightfield {
                 rows: n,
                 columns: n,
@@ -443,22 +440,22 @@ impl TerrainDistribution {
                 }
             }
         }
-        Ok(Layout { world, end_floors })
+        Ok(Layout { world, craters })
     }
 }
 
-/// An episode's terrain: its world, and the crater floors on which it ends.
+/// An episode's terrain: its world, and its craters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
     /// The world (ground, obstacles).
     pub world: WorldSpec,
-    /// The floors of craters with `terminate` (none otherwise).
-    pub end_floors: Vec<Floor>,
+    /// The craters sunk into the rough ground (each to the top of its wall).
+    pub craters: Vec<Disc>,
 }
 
-/// A round floor: centre (x, y) and radius, metres.
+/// A disc on the plane: centre (x, y) and radius, metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Floor {
+pub struct Disc {
     /// Centre x.
     pub x: f64,
     /// Centre y.
@@ -467,16 +464,138 @@ pub struct Floor {
     pub radius: f64,
 }
 
-impl Floor {
-    /// (x, y) lies on the floor.
+impl Disc {
+    /// (x, y) lies inside.
     pub fn contains(&self, x: f64, y: f64) -> bool {
         (x - self.x).hypot(y - self.y) < self.radius
     }
+
+    /// The length of the shortest way from `p` to `g` that does not cross the disc's inside: the
+    /// straight line where that misses the disc, else the tangent from `p`, the arc and the tangent
+    /// to `g`. A point inside first leaves the disc radially, to the rim.
+    pub fn route_distance(&self, p: (f64, f64), g: (f64, f64)) -> f64 {
+        let r = self.radius;
+        let (p, dp) = self.onto_rim(p);
+        let (g, dg) = self.onto_rim(g);
+        let out = (r - dp).max(0.0) + (r - dg).max(0.0);
+        let straight = (g.0 - p.0).hypot(g.1 - p.1);
+        let (dp, dg) = (dp.max(r), dg.max(r));
+        if r <= 0.0 {
+            return straight;
+        }
+        // The line is blocked when p and g lie further apart, seen from the centre, than the
+        // angles between each and its tangent point (acos(r / d)); the difference is the arc.
+        let between = ((p.0 * g.0 + p.1 * g.1) / (dp * dg))
+            .clamp(-1.0, 1.0)
+            .acos();
+        let arc = between - (r / dp).acos() - (r / dg).acos();
+        if arc <= 0.0 {
+            return out + straight;
+        }
+        out + (dp * dp - r * r).sqrt() + r * arc + (dg * dg - r * r).sqrt()
+    }
+
+    /// `q` relative to the centre, moved radially out to the rim when inside, and its distance
+    /// from the centre before moving.
+    fn onto_rim(&self, q: (f64, f64)) -> ((f64, f64), f64) {
+        let (x, y) = (q.0 - self.x, q.1 - self.y);
+        let d = x.hypot(y);
+        if d < self.radius && d > 0.0 {
+            ((x * self.radius / d, y * self.radius / d), d)
+        } else {
+            ((x, y), d)
+        }
+    }
+}
+
+/// The distance from `p` to `g` along the shortest way around the `discs`: exact for one disc (and
+/// for discs whose detours do not meet), otherwise the longest single-disc way, a lower bound.
+pub fn route_distance(p: (f64, f64), g: (f64, f64), discs: &[Disc]) -> f64 {
+    discs
+        .iter()
+        .map(|d| d.route_distance(p, g))
+        .fold((g.0 - p.0).hypot(g.1 - p.1), f64::max)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The shortest way from `p` to `g` around the disc, by Dijkstra over a visibility graph: `p`,
+    /// `g` and the `n` corners of a polygon whose sides touch the rim, joined where the segment
+    /// between two of them keeps out of the disc. An independent, numerical reference for
+    /// `route_distance` (longer by at most a factor tan(pi / n) / (pi / n) along the rim).
+    fn dijkstra_around(d: &Disc, p: (f64, f64), g: (f64, f64), n: usize) -> f64 {
+        let r = d.radius / (std::f64::consts::PI / n as f64).cos() * (1.0 + 1e-12);
+        let mut pts = vec![p, g];
+        pts.extend((0..n).map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            (d.x + r * a.cos(), d.y + r * a.sin())
+        }));
+        let clear = |a: (f64, f64), b: (f64, f64)| {
+            // The distance from the centre to the segment a-b, at least the radius.
+            let (vx, vy) = (b.0 - a.0, b.1 - a.1);
+            let t = (((d.x - a.0) * vx + (d.y - a.1) * vy) / (vx * vx + vy * vy)).clamp(0.0, 1.0);
+            (a.0 + t * vx - d.x).hypot(a.1 + t * vy - d.y) >= d.radius * (1.0 - 1e-12)
+        };
+        let mut best = vec![f64::INFINITY; pts.len()];
+        let mut done = vec![false; pts.len()];
+        best[0] = 0.0;
+        for _ in 0..pts.len() {
+            let Some(i) = (0..pts.len())
+                .filter(|&i| !done[i])
+                .min_by(|&a, &b| best[a].total_cmp(&best[b]))
+            else {
+                break;
+            };
+            done[i] = true;
+            for j in 0..pts.len() {
+                if !done[j] && clear(pts[i], pts[j]) {
+                    let w = (pts[j].0 - pts[i].0).hypot(pts[j].1 - pts[i].1);
+                    best[j] = best[j].min(best[i] + w);
+                }
+            }
+        }
+        best[1]
+    }
+
+    #[test]
+    fn the_way_around_a_disc_is_the_shortest_one() {
+        let d = Disc {
+            x: 1.0,
+            y: -6.0,
+            radius: 2.0,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut blocked = 0;
+        for _ in 0..40 {
+            let mut outside = || loop {
+                let q = (rng.gen_range(-6.0..8.0), rng.gen_range(-13.0..1.0));
+                if !d.contains(q.0, q.1) {
+                    return q;
+                }
+            };
+            let (p, g) = (outside(), outside());
+            let want = dijkstra_around(&d, p, g, 1440);
+            let got = d.route_distance(p, g);
+            assert!(
+                got <= want + 1e-9 && want - got < 1e-4,
+                "{p:?} {g:?}: {got} vs {want}"
+            );
+            blocked += usize::from(got > (g.0 - p.0).hypot(g.1 - p.1) + 1e-9);
+            assert!((route_distance(p, g, &[d]) - got).abs() < 1e-12);
+            assert_eq!(route_distance(p, g, &[]), (g.0 - p.0).hypot(g.1 - p.1));
+        }
+        assert!((10..35).contains(&blocked), "{blocked} of 40 went around");
+        // Straight through the middle: two tangents and the arc between them.
+        let (p, g) = ((1.0, -1.0), (1.0, -11.0));
+        let want = 2.0 * 21.0f64.sqrt() + 2.0 * (std::f64::consts::PI - 2.0 * (0.4f64).acos());
+        assert!((d.route_distance(p, g) - want).abs() < 1e-12);
+        // From inside, radially out first: 0.5 m to the rim, then around.
+        let inside = d.route_distance((1.0, -4.5), g);
+        let want = 0.5 + 2.0 * (std::f64::consts::PI - (0.4f64).acos()) + 21.0f64.sqrt();
+        assert!((inside - want).abs() < 1e-12, "{inside} {want}");
+    }
 
     fn start() -> StartPose {
         StartPose {

@@ -816,3 +816,50 @@ fn a_crater_that_terminates_ends_the_episode_once_the_head_is_over_its_floor() {
     assert!(floors.is_empty() && !terminated);
     assert_eq!(&heads_on[..heads.len()], &heads[..]);
 }
+
+#[test]
+fn progress_around_craters_measures_the_way_around_them() {
+    // Flat ground, one crater (not ending the episode) on the line to a goal 12 m ahead: the
+    // unsteered wave crawls into it. The progress terms add up to the way around the crater from
+    // the start less that from where the head ends (it telescopes), not to the straight distances.
+    let mut config = EnvConfig::rough_task(Preset::Paper, 10);
+    let rough = config.terrain.as_mut().unwrap().rough.as_mut().unwrap();
+    (rough.amplitude, rough.hills_amplitude) = (0.0, 0.0);
+    rough.craters = Craters {
+        count: 1,
+        offset: 0.0,
+        ..Craters::default()
+    };
+    config.reward.progress_around_craters = true;
+    let mut e = env(config);
+    let start = StartPose {
+        x: 0.0,
+        y: 0.0,
+        z: 1.75, // the flat ground lies 1.25 m up: half the crater's depth
+        yaw: 0.0,
+    };
+    let goal = (0.0, -12.0);
+    e.reset(
+        Some(1),
+        ResetOptions {
+            start: Some(start),
+            goal: Some(goal),
+        },
+    )
+    .unwrap();
+    let crater = e.route_around.clone();
+    assert_eq!(crater.len(), 1);
+    let origin = e.origin;
+    let around = |p: (f64, f64)| crater[0].route_distance(p, goal);
+    let straight = |p: (f64, f64)| (goal.0 - p.0).hypot(goal.1 - p.1);
+    let mut progress = 0.0;
+    let mut longest_detour = 0.0f64;
+    for _ in 0..450 {
+        let s = e.step(&[0.0f32, 0.0, 0.0]).unwrap();
+        progress += s.info.reward_terms.progress;
+        longest_detour = longest_detour.max(around(e.position) - straight(e.position));
+    }
+    assert!((progress - (around(origin) - around(e.position))).abs() < 1e-9);
+    // In the crater the way out and around is metres longer than the straight line.
+    assert!(longest_detour > 2.0, "{longest_detour}");
+}

@@ -52,7 +52,8 @@ class SnakeEnv(gymnasium.Env):
 
     **Reward**: minus the planar head-goal distance (times ``reward["distance_weight"]``, 1); 100
     instead once the head is within ``goal_radius`` of the goal. Optional terms (``reward={...}``, off
-    by default): progress toward the goal, a smoothness penalty on the change of the action between
+    by default): progress toward the goal (with ``progress_around_craters``, along the shortest way
+    around the rough ground's craters), a smoothness penalty on the change of the action between
     steps, an energy penalty on the motors' work. Every term is reported in ``info``, with the
     episode's mechanical ``work`` (J), ``path_length`` and ``displacement`` (m) so far.
 
