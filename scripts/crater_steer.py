@@ -4,7 +4,8 @@ terrain observation's rolled head frame, except that where the height map shows 
 crater's wall: a point up to 1.5 m ahead more than DROP below the head) it turns away from the deeper
 side until the way ahead is clear. It measures whether seeing the crater is enough, without learning,
 to go around it (docs/tasks.md, "A crater in the way").
-Usage: crater_steer.py [EPISODES] [SEED] [DROP]"""
+Usage: crater_steer.py [EPISODES] [SEED] [DROP] [CONFIG] (CONFIG: a run configuration whose env to
+run, rough-10-crater.yaml's by default)."""
 
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ def main() -> None:
     episodes = int(args[0]) if len(args) > 0 else 100
     seed = int(args[1]) if len(args) > 1 else 900000
     drop = float(args[2]) if len(args) > 2 else 0.5
-    run = runconfig.load(CONFIG)
+    run = runconfig.load(Path(args[3]) if len(args) > 3 else CONFIG)
     joints = run["joints"]
     kwargs = {**run["env"], "joints": joints}
     summary = summarize(run_episodes(crater_steer(joints, drop), kwargs, episodes, seed))

@@ -467,19 +467,19 @@ impl SnakeEnv {
             let seed = rng.gen::<u64>();
             let layout = terrain.layout(world, &start, goal, seed)?;
             if let Some(c) = terrain.rough.as_ref().map(|r| r.craters) {
+                let widened = |by: f64| -> Vec<Disc> {
+                    let grow = |d: &Disc| Disc {
+                        radius: d.radius + by,
+                        ..*d
+                    };
+                    layout.craters.iter().map(grow).collect()
+                };
                 if c.terminate {
-                    self.end_floors = layout
-                        .craters
-                        .iter()
-                        .map(|d| Disc {
-                            radius: c.radius - c.wall,
-                            ..*d
-                        })
-                        .collect();
+                    self.end_floors = widened(-c.wall);
                 }
-            }
-            if self.config.reward.progress_around_craters {
-                self.route_around = layout.craters;
+                if self.config.reward.progress_around_craters {
+                    self.route_around = widened(c.clearance);
+                }
             }
             laid_out = layout.world;
             world = &laid_out;

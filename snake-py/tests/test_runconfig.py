@@ -56,6 +56,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "pegs-10",
         "rough-10-blind",
         "rough-10-crater-end",
+        "rough-10-crater-route",
         "rough-10-crater",
         "rough-10",
     ]

@@ -250,7 +250,7 @@ pub struct RewardConfig {
     /// Precision of the goal-minus-position differences (see [`DistancePrecision`]).
     pub distance_precision: DistancePrecision,
     /// The progress term measures the distance along the shortest way around the rough ground's
-    /// craters (each a disc of the crater's radius; `snake_core::route_distance`) instead of the
+    /// craters (each a disc of the crater's radius plus its `clearance`; `snake_core::route_distance`) instead of the
     /// straight line (false; left out when false). Success is still judged by the straight line.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub progress_around_craters: bool,

@@ -148,6 +148,10 @@ pub struct Craters {
     /// `radius - wall` of its centre (false: the snake may climb out again). Left out when false.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub terminate: bool,
+    /// How far outside the rim the way around a crater keeps, metres (1.0): the way the progress
+    /// term measures with `reward.progress_around_craters` goes around a disc this much wider than
+    /// the crater, so that it does not lead the body along the edge it slides in from.
+    pub clearance: f64,
 }
 
 impl Default for Craters {
@@ -161,6 +165,7 @@ impl Default for Craters {
             start_clear: 3.0,
             goal_clear: 1.0,
             terminate: false,
+            clearance: 1.0,
         }
     }
 }
@@ -190,6 +195,7 @@ impl Craters {
             ("terrain.rough.craters.offset", self.offset),
             ("terrain.rough.craters.start_clear", self.start_clear),
             ("terrain.rough.craters.goal_clear", self.goal_clear),
+            ("terrain.rough.craters.clearance", self.clearance),
         ] {
             check_range(what, v, 0.0, MAX_OBSTACLE_SIZE)?;
         }
@@ -710,6 +716,10 @@ mod tests {
             },
             Craters {
                 depth: f64::NAN,
+                ..Craters::default()
+            },
+            Craters {
+                clearance: -1.0,
                 ..Craters::default()
             },
         ] {
