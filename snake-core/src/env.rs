@@ -587,7 +587,6 @@ impl SnakeEnv {
             &RewardInputs {
                 success,
                 distance,
-                previous_distance: self.distance,
                 progress_distance,
                 previous_progress_distance: self.progress_distance,
                 action: self.driver.action(),

@@ -171,8 +171,6 @@ pub struct RewardInputs<'a> {
     pub success: bool,
     /// Distance to the goal after the step ([`paper_distance`]).
     pub distance: f64,
-    /// Distance to the goal before the step.
-    pub previous_distance: f64,
     /// The distance the progress term measures after the step: `distance`, or with
     /// `progress_around_craters` the way around the craters.
     pub progress_distance: f64,
@@ -250,8 +248,9 @@ pub struct RewardConfig {
     /// Precision of the goal-minus-position differences (see [`DistancePrecision`]).
     pub distance_precision: DistancePrecision,
     /// The progress term measures the distance along the shortest way around the rough ground's
-    /// craters (each a disc of the crater's radius plus its `clearance`; `snake_core::route_distance`) instead of the
-    /// straight line (false; left out when false). Success is still judged by the straight line.
+    /// craters (each a disc of the crater's radius plus its `clearance`;
+    /// `snake_core::route_distance`) instead of the straight line (false; left out when false).
+    /// Success is still judged by the straight line.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub progress_around_craters: bool,
 }
