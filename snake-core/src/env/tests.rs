@@ -761,34 +761,47 @@ fn the_rough_task_ends_an_episode_whose_head_leaves_the_ground() {
     panic!("the episode did not end");
 }
 
+/// The goal of [`one_crater_ahead`]'s episode, 12 m ahead of the start (-y).
+const CRATER_GOAL: (f64, f64) = (0.0, -12.0);
+
+/// A 10-joint snake reset on flat rough ground (no bumps, no hills) with one crater, `craters`
+/// (count 1, on the line), across the line to [`CRATER_GOAL`]: its centre 6-8 m ahead. The unsteered
+/// wave crawls ahead into it.
+fn one_crater_ahead(craters: Craters, progress_around_craters: bool) -> SnakeEnv {
+    let mut config = EnvConfig::rough_task(Preset::Paper, 10);
+    let rough = config.terrain.as_mut().unwrap().rough.as_mut().unwrap();
+    (rough.amplitude, rough.hills_amplitude) = (0.0, 0.0);
+    rough.craters = Craters {
+        count: 1,
+        offset: 0.0,
+        ..craters
+    };
+    config.reward.progress_around_craters = progress_around_craters;
+    config.max_episode_steps = 600;
+    let mut e = env(config);
+    let options = ResetOptions {
+        start: Some(StartPose {
+            x: 0.0,
+            y: 0.0,
+            // Bullet puts the grid's z = 0 halfway between its lowest and highest sample: the flat
+            // ground lies half the crater's depth up.
+            z: 0.5 + 0.5 * craters.depth,
+            yaw: 0.0,
+        }),
+        goal: Some(CRATER_GOAL),
+    };
+    e.reset(Some(1), options).unwrap();
+    e
+}
+
 #[test]
 fn a_crater_that_terminates_ends_the_episode_once_the_head_is_over_its_floor() {
-    // Flat ground, one crater across the line to a goal 12 m ahead (-y): its centre 6-8 m ahead,
-    // on the line. The unsteered wave crawls ahead into it.
     let run = |terminate: bool| {
-        let mut config = EnvConfig::rough_task(Preset::Paper, 10);
-        let rough = config.terrain.as_mut().unwrap().rough.as_mut().unwrap();
-        (rough.amplitude, rough.hills_amplitude) = (0.0, 0.0);
-        rough.craters = Craters {
-            count: 1,
-            offset: 0.0,
+        let craters = Craters {
             terminate,
             ..Craters::default()
         };
-        config.max_episode_steps = 600;
-        let mut e = env(config);
-        let options = ResetOptions {
-            start: Some(StartPose {
-                x: 0.0,
-                y: 0.0,
-                // Bullet puts the grid's z = 0 halfway between its lowest and highest sample: the
-                // flat ground lies 1.25 m up (half the crater's depth).
-                z: 1.75,
-                yaw: 0.0,
-            }),
-            goal: Some((0.0, -12.0)),
-        };
-        e.reset(Some(1), options).unwrap();
+        let mut e = one_crater_ahead(craters, false);
         let floors = e.end_floors.clone();
         let mut heads = Vec::new();
         for _ in 0..600 {
@@ -819,34 +832,11 @@ fn a_crater_that_terminates_ends_the_episode_once_the_head_is_over_its_floor() {
 
 #[test]
 fn progress_around_craters_measures_the_way_around_them() {
-    // Flat ground, one crater (not ending the episode) on the line to a goal 12 m ahead: the
-    // unsteered wave crawls into it. The progress terms add up to the way around the crater from
-    // the start less that from where the head ends (it telescopes), not to the straight distances.
-    let mut config = EnvConfig::rough_task(Preset::Paper, 10);
-    let rough = config.terrain.as_mut().unwrap().rough.as_mut().unwrap();
-    (rough.amplitude, rough.hills_amplitude) = (0.0, 0.0);
-    rough.craters = Craters {
-        count: 1,
-        offset: 0.0,
-        ..Craters::default()
-    };
-    config.reward.progress_around_craters = true;
-    let mut e = env(config);
-    let start = StartPose {
-        x: 0.0,
-        y: 0.0,
-        z: 1.75, // the flat ground lies 1.25 m up: half the crater's depth
-        yaw: 0.0,
-    };
-    let goal = (0.0, -12.0);
-    e.reset(
-        Some(1),
-        ResetOptions {
-            start: Some(start),
-            goal: Some(goal),
-        },
-    )
-    .unwrap();
+    // The crater does not end the episode here. The progress terms add up to the way around the
+    // crater from the start less that from where the head ends (it telescopes), not to the
+    // straight distances.
+    let mut e = one_crater_ahead(Craters::default(), true);
+    let goal = CRATER_GOAL;
     let crater = e.route_around.clone();
     assert_eq!(crater.len(), 1);
     let origin = e.origin;
