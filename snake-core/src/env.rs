@@ -27,7 +27,8 @@ pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
 pub use terrain::{
-    route_distance, Craters, Disc, Layout, PegField, RoughGround, TerrainDistribution,
+    route_distance, Capsule, Craters, Disc, Layout, PegField, Ridges, RoughGround, Segment,
+    TerrainDistribution,
 };
 pub use trace::PhysicsTrace;
 
@@ -278,6 +279,8 @@ pub struct SnakeEnv {
     end_floors: Vec<Disc>,
     /// The craters the progress term measures its way around (`reward.progress_around_craters`).
     route_around: Vec<Disc>,
+    /// The ridges it measures its way around (`reward.progress_around_ridges`).
+    route_around_ridges: Vec<Capsule>,
     /// The distance the progress term measured after the latest step or reset.
     progress_distance: f64,
 }
@@ -326,6 +329,7 @@ impl SnakeEnv {
             ground_edge: None,
             end_floors: Vec::new(),
             route_around: Vec::new(),
+            route_around_ridges: Vec::new(),
             progress_distance: 0.0,
         })
     }
@@ -461,6 +465,7 @@ impl SnakeEnv {
         self.episode_world = None;
         self.end_floors.clear();
         self.route_around.clear();
+        self.route_around_ridges.clear();
         let laid_out;
         if let Some(terrain) = &self.config.terrain {
             let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
@@ -479,6 +484,16 @@ impl SnakeEnv {
                 }
                 if self.config.reward.progress_around_craters {
                     self.route_around = widened(c.clearance);
+                }
+            }
+            if let Some(r) = terrain.rough.as_ref().map(|r| r.ridges) {
+                if self.config.reward.progress_around_ridges {
+                    let radius = r.half_width() + r.clearance;
+                    self.route_around_ridges = layout
+                        .ridges
+                        .iter()
+                        .map(|&segment| Capsule { segment, radius })
+                        .collect();
                 }
             }
             laid_out = layout.world;
@@ -577,11 +592,12 @@ impl SnakeEnv {
         let weights = self.config.reward;
         let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
         let success = distance < self.config.goal_radius;
-        let progress_distance = if self.route_around.is_empty() {
-            distance
-        } else {
-            self.progress_distance_at(p)
-        };
+        let progress_distance =
+            if self.route_around.is_empty() && self.route_around_ridges.is_empty() {
+                distance
+            } else {
+                self.progress_distance_at(p)
+            };
         let terms = RewardTerms::compute(
             &weights,
             &RewardInputs {
@@ -626,12 +642,15 @@ impl SnakeEnv {
     }
 
     /// The distance the progress term measures with the base at `p`: the straight one (the
-    /// latest [`SnakeEnv::distance`]) unless it goes around craters.
+    /// latest [`SnakeEnv::distance`]) unless it goes around craters or ridges.
     fn progress_distance_at(&self, p: (f64, f64)) -> f64 {
-        if self.route_around.is_empty() {
+        if self.route_around.is_empty() && self.route_around_ridges.is_empty() {
             self.distance
         } else {
-            route_distance(p, self.goal, &self.route_around)
+            self.route_around_ridges
+                .iter()
+                .map(|c| c.route_distance(p, self.goal))
+                .fold(route_distance(p, self.goal, &self.route_around), f64::max)
         }
     }
 

@@ -50,10 +50,10 @@ pub mod world_file;
 
 pub use config::{Preset, SnakeConfig};
 pub use env::{
-    route_distance, ActionConfig, ActionMode, Craters, Disc, DistancePrecision, EnvConfig,
+    route_distance, ActionConfig, ActionMode, Capsule, Craters, Disc, DistancePrecision, EnvConfig,
     GoalDistribution, Info, Layout, ObservationLayout, PegField, ResetOptions, RewardConfig,
-    RewardTerms, RoughGround, SnakeEnv, StartDistribution, StepOutcome, StepResult, Task,
-    TerrainDistribution, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING,
+    RewardTerms, Ridges, RoughGround, Segment, SnakeEnv, StartDistribution, StepOutcome,
+    StepResult, Task, TerrainDistribution, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING,
 };
 pub use error::{Error, Result};
 pub use gait::{

@@ -113,6 +113,9 @@ pub const MAX_OBSTACLES: usize = 10_000;
 /// Most craters a rough ground may have (`terrain.rough.craters.count`).
 pub const MAX_CRATERS: usize = 16;
 
+/// Most ridges a rough ground may have (`terrain.rough.ridges.count`).
+pub const MAX_RIDGES: usize = 16;
+
 /// Largest size of an obstacle (a half extent, radius or height), a grid spacing or a scale, metres.
 pub const MAX_OBSTACLE_SIZE: f64 = 1.0e3;
 

@@ -231,25 +231,59 @@ def test_bad_input_is_one_line(capsys):
     assert "unknown task 'mountains'" in capsys.readouterr().err
 
 
-def test_a_crater_lies_across_the_line_to_the_goal_and_bad_craters_are_one_line():
-    """terrain.rough.craters (docs/tasks.md): on ground without bumps or hills, the straight line from
-    start to goal dips exactly the crater's depth (its flat bottom) and is flat near both ends (goals
-    10-12 m away leave room for the crater between start_clear and goal_clear)."""
-    flat = {"amplitude": 0.0, "hills_amplitude": 0.0}
+def _flat_ground_along_the_line(rough: dict, distance: list[float]):
+    """For three seeds of the rough task on ground without bumps or hills, with ``rough``'s keys:
+    400 points (m from the start) along the straight line from start to goal, and the ground's
+    height there (read from the episode's world)."""
     env = snakesim.SnakeRoughEnv(
-        terrain={"rough": {**flat, "craters": {"count": 1}}}, goal_distribution={"distance": [10, 12]}
+        terrain={"rough": {"amplitude": 0.0, "hills_amplitude": 0.0, **rough}},
+        goal_distribution={"distance": distance},
     )
     for seed in range(3):
         _, info = env.reset(seed=seed)
         world = json.loads(env._env.world_json())
         (x0, y0), (x1, y1) = info["start"][:2], info["goal"]
-        line = [_ground(world, x0 + t * (x1 - x0), y0 + t * (y1 - y0)) for t in np.linspace(0, 1, 400)]
+        t = np.linspace(0, 1, 400)
+        line = np.array([_ground(world, x0 + u * (x1 - x0), y0 + u * (y1 - y0)) for u in t])
+        yield t * np.hypot(x1 - x0, y1 - y0), line
+
+
+def test_a_crater_lies_across_the_line_to_the_goal_and_bad_craters_are_one_line():
+    """terrain.rough.craters (docs/tasks.md): on ground without bumps or hills, the straight line from
+    start to goal dips exactly the crater's depth (its flat bottom) and is flat near both ends (goals
+    10-12 m away leave room for the crater between start_clear and goal_clear)."""
+    for _, line in _flat_ground_along_the_line({"craters": {"count": 1}}, [10, 12]):
         assert max(line) - min(line) == pytest.approx(2.5, abs=1e-5)
         assert line[0] == pytest.approx(max(line), abs=1e-5) and line[-1] == pytest.approx(
             max(line), abs=1e-5
         )
     with pytest.raises(ValueError, match=r"^terrain\.rough\.craters\.count") as error:
         snakesim.SnakeRoughEnv(terrain={"rough": {"craters": {"count": 99}}})
+    assert "\n" not in str(error.value)
+
+
+def test_a_ridge_lies_across_the_line_to_the_goal_and_bad_ridges_are_one_line():
+    """terrain.rough.ridges (docs/tasks.md): on ground without bumps or hills, the straight line from
+    start to goal rises exactly the ridge's height (its flat crest) and is flat near both ends (the
+    crest at least start_clear 3 m from the start and goal_clear 2 m from the goal, its sides 0.75 m
+    wide beyond it)."""
+    for along, line in _flat_ground_along_the_line({"ridges": {"count": 1}}, [7, 10]):
+        assert max(line) - min(line) == pytest.approx(1.5, abs=1e-5)
+        clear = (along < 3.0 - 0.75) | (along > along[-1] - 2.0 + 0.75)
+        assert np.ptp(line[clear]) == pytest.approx(0.0, abs=1e-5)
+    with pytest.raises(ValueError, match=r"^terrain\.rough\.ridges\.count") as error:
+        snakesim.SnakeRoughEnv(terrain={"rough": {"ridges": {"count": 99}}})
+    assert "\n" not in str(error.value)
+
+    # Without ridges, progress around them is the straight progress, bit for bit.
+    def rewards(progress_around: bool) -> list[float]:
+        env = snakesim.SnakeRoughEnv(joints=10, reward={"progress_around_ridges": progress_around})
+        env.reset(seed=1)
+        return [env.step(np.zeros(3, dtype=np.float32))[1] for _ in range(200)]
+
+    assert rewards(True) == rewards(False)
+    with pytest.raises(TypeError, match="^reward.progress_around_ridges: invalid type") as error:
+        snakesim.SnakeRoughEnv(reward={"progress_around_ridges": "yes"})
     assert "\n" not in str(error.value)
 
 

@@ -253,6 +253,12 @@ pub struct RewardConfig {
     /// Success is still judged by the straight line.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub progress_around_craters: bool,
+    /// The same around the rough ground's ridges (each a capsule: the ridge's footprint, half its
+    /// crest plus a side either way of its crest line, widened by its `clearance`;
+    /// `snake_core::Capsule::route_distance`); with both, the longer of the two ways (false; left
+    /// out when false).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub progress_around_ridges: bool,
 }
 
 impl Default for RewardConfig {
@@ -265,6 +271,7 @@ impl Default for RewardConfig {
             success_reward: 100.0,
             distance_precision: DistancePrecision::Float32,
             progress_around_craters: false,
+            progress_around_ridges: false,
         }
     }
 }

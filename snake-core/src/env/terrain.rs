@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{invalid, Result};
 use crate::limits::{
     check_range, MAX_CRATERS, MAX_HEIGHTFIELD_SAMPLES, MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES,
-    MAX_OBSTACLE_SIZE, MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
+    MAX_OBSTACLE_SIZE, MAX_RIDGES, MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
 };
 use crate::math::StartPose;
 use crate::world_file::{
@@ -97,6 +97,10 @@ pub struct RoughGround {
     /// ([`Craters`]; `count` 0, the default: none, and left out when written).
     #[serde(skip_serializing_if = "Craters::is_empty")]
     pub craters: Craters,
+    /// Ridges raised across the straight line from the start to the goal ([`Ridges`]; `count` 0,
+    /// the default: none, and left out when written).
+    #[serde(skip_serializing_if = "Ridges::is_empty")]
+    pub ridges: Ridges,
     /// The ground's lateral friction, when given (`None`: Bullet's 0.5).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<f64>,
@@ -112,6 +116,7 @@ impl Default for RoughGround {
             spacing: 0.125,
             margin: 3.0,
             craters: Craters::default(),
+            ridges: Ridges::default(),
             friction: None,
         }
     }
@@ -202,9 +207,8 @@ impl Craters {
         Ok(())
     }
 
-    /// Sinks the craters into the `n` x `n` heights (sample (i, j) at index `j * n + i` lies at
-    /// ((i - c) * spacing, (j - c) * spacing), c = (n - 1) / 2: Bullet centres the grid on the
-    /// origin), drawing their centres from `rng`; returns the centres.
+    /// Sinks the craters into the `n` x `n` heights (laid out as [`add_over_grid`] says), drawing
+    /// their centres from `rng`; returns the centres.
     fn sink(
         &self,
         heights: &mut [f32],
@@ -217,46 +221,243 @@ impl Craters {
         if self.is_empty() {
             return Vec::new();
         }
-        let (distance, (ux, uy)) = line_to_goal(start, goal);
-        let (first, last) = (
-            self.start_clear + self.radius,
-            distance - self.goal_clear - self.radius,
+        let centres = along_the_line(
+            self.count,
+            (
+                self.start_clear + self.radius,
+                self.goal_clear + self.radius,
+            ),
+            self.offset,
+            start,
+            goal,
+            rng,
         );
-        let centres: Vec<(f64, f64)> = (0..self.count)
-            .map(|_| {
-                let along = if last > first {
-                    rng.gen_range(first..=last)
-                } else {
-                    0.5 * (first + last)
-                };
-                let across = rng.gen_range(-1.0..=1.0) * self.offset;
-                (
-                    start.x + along * ux - across * uy,
-                    start.y + along * uy + across * ux,
-                )
+        add_over_grid(heights, n, spacing, |x, y| {
+            let sink = centres
+                .iter()
+                .map(|&(cx, cy)| {
+                    let r = (x - cx).hypot(y - cy);
+                    let rise = if self.wall > 0.0 {
+                        smoothstep((r - (self.radius - self.wall)) / self.wall)
+                    } else {
+                        f64::from(u8::from(r >= self.radius))
+                    };
+                    self.depth * (1.0 - rise)
+                })
+                .fold(0.0, f64::max);
+            -sink
+        });
+        centres
+    }
+}
+
+/// Straight ridges raised across the straight line from the start to the goal, too steep and too
+/// high for the snake to crawl over: each is a crest `length` long, perpendicular to the line, whose
+/// middle lies `along` metres from the start, uniform in [`start_clear`, `distance - goal_clear`]
+/// (the midpoint where that is empty), and `across` it, uniform in [-`offset`, `offset`]. Within
+/// `crest / 2` of the crest line (a segment, so its ends are round) the ground lies `height` above
+/// the rough ground; over the next `wall` metres it falls back (a smoothstep, steepest in its
+/// middle: `1.5 * height / wall`). Where ridges overlap the higher wins. A ridge is a trap for a
+/// controller that heads straight for the goal: pressed against its flat side, the goal's bearing
+/// pulls the head back to the middle (docs/tasks.md, "A ridge across the way").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Ridges {
+    /// How many ridges (0).
+    pub count: usize,
+    /// Length of the crest line, metres (6.0).
+    pub length: f64,
+    /// Height above the rough ground, metres (1.5).
+    pub height: f64,
+    /// Width of the flat crest, metres (0.5).
+    pub crest: f64,
+    /// Width of each side, metres (0.5).
+    pub wall: f64,
+    /// Largest distance of a ridge's middle from the straight line, metres (0.5).
+    pub offset: f64,
+    /// Least distance of a ridge's crest line from the start (the base: the cube snake's head),
+    /// metres (3.0).
+    pub start_clear: f64,
+    /// Least distance of a ridge's crest line from the goal, metres (2.0).
+    pub goal_clear: f64,
+    /// How far beyond the ridge's foot the way around it keeps, metres (1.0): the way the progress
+    /// term measures with `reward.progress_around_ridges` goes around a capsule this much wider
+    /// than the ridge's footprint.
+    pub clearance: f64,
+}
+
+impl Default for Ridges {
+    fn default() -> Self {
+        Ridges {
+            count: 0,
+            length: 6.0,
+            height: 1.5,
+            crest: 0.5,
+            wall: 0.5,
+            offset: 0.5,
+            start_clear: 3.0,
+            goal_clear: 2.0,
+            clearance: 1.0,
+        }
+    }
+}
+
+impl Ridges {
+    /// No ridge.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Half the width of a ridge's footprint: from its crest line to the foot of its sides.
+    pub fn half_width(&self) -> f64 {
+        0.5 * self.crest + self.wall
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.count > MAX_RIDGES {
+            return Err(invalid(format!(
+                "terrain.rough.ridges.count must be at most {MAX_RIDGES}, got {}",
+                self.count
+            )));
+        }
+        check_range(
+            "terrain.rough.ridges.height",
+            self.height,
+            0.0,
+            MAX_TERRAIN_HEIGHT,
+        )?;
+        for (what, v) in [
+            ("terrain.rough.ridges.length", self.length),
+            ("terrain.rough.ridges.crest", self.crest),
+            ("terrain.rough.ridges.wall", self.wall),
+            ("terrain.rough.ridges.offset", self.offset),
+            ("terrain.rough.ridges.start_clear", self.start_clear),
+            ("terrain.rough.ridges.goal_clear", self.goal_clear),
+            ("terrain.rough.ridges.clearance", self.clearance),
+        ] {
+            check_range(what, v, 0.0, MAX_OBSTACLE_SIZE)?;
+        }
+        Ok(())
+    }
+
+    /// Raises the ridges on the `n` x `n` heights (laid out as [`add_over_grid`] says), drawing
+    /// their middles from `rng`; returns each crest line's two ends.
+    fn raise(
+        &self,
+        heights: &mut [f32],
+        n: usize,
+        spacing: f64,
+        start: &StartPose,
+        goal: (f64, f64),
+        rng: &mut ChaCha8Rng,
+    ) -> Vec<Segment> {
+        if self.is_empty() {
+            return Vec::new();
+        }
+        let (_, (ux, uy)) = line_to_goal(start, goal);
+        let half = 0.5 * self.length;
+        let middles = along_the_line(
+            self.count,
+            (self.start_clear, self.goal_clear),
+            self.offset,
+            start,
+            goal,
+            rng,
+        );
+        // Each crest runs across the line: along its left, (-uy, ux).
+        let crests: Vec<Segment> = middles
+            .into_iter()
+            .map(|(mx, my)| Segment {
+                a: (mx + half * uy, my - half * ux),
+                b: (mx - half * uy, my + half * ux),
             })
             .collect();
-        let c = 0.5 * (n - 1) as f64;
-        for j in 0..n {
-            let y = (j as f64 - c) * spacing;
-            for i in 0..n {
-                let x = (i as f64 - c) * spacing;
-                let sink = centres
-                    .iter()
-                    .map(|&(cx, cy)| {
-                        let r = (x - cx).hypot(y - cy);
-                        let rise = if self.wall > 0.0 {
-                            smoothstep((r - (self.radius - self.wall)) / self.wall)
-                        } else {
-                            f64::from(u8::from(r >= self.radius))
-                        };
-                        self.depth * (1.0 - rise)
-                    })
-                    .fold(0.0, f64::max);
-                heights[j * n + i] -= sink as f32;
-            }
+        add_over_grid(heights, n, spacing, |x, y| {
+            crests
+                .iter()
+                .map(|s| {
+                    let d = s.distance_to((x, y)) - 0.5 * self.crest;
+                    let fall = if self.wall > 0.0 {
+                        smoothstep(d / self.wall)
+                    } else {
+                        f64::from(u8::from(d > 0.0))
+                    };
+                    self.height * (1.0 - fall)
+                })
+                .fold(0.0, f64::max)
+        });
+        crests
+    }
+}
+
+/// A segment on the plane from `a` to `b`, metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    /// One end (x, y).
+    pub a: (f64, f64),
+    /// The other end (x, y).
+    pub b: (f64, f64),
+}
+
+impl Segment {
+    /// The point of the segment nearest to `p`.
+    pub fn nearest(&self, p: (f64, f64)) -> (f64, f64) {
+        let (dx, dy) = (self.b.0 - self.a.0, self.b.1 - self.a.1);
+        let len2 = dx * dx + dy * dy;
+        let t = if len2 > 0.0 {
+            (((p.0 - self.a.0) * dx + (p.1 - self.a.1) * dy) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (self.a.0 + t * dx, self.a.1 + t * dy)
+    }
+
+    /// The distance from `p` to the nearest point of the segment.
+    pub fn distance_to(&self, p: (f64, f64)) -> f64 {
+        let s = self.nearest(p);
+        (p.0 - s.0).hypot(p.1 - s.1)
+    }
+}
+
+/// `count` points drawn from `rng` `along` the straight line from the start to the goal, uniform in
+/// [`clear.0`, `distance - clear.1`] (the midpoint where that is empty), and `across` it, uniform in
+/// [-`offset`, `offset`] (to its left), in that order for each point.
+fn along_the_line(
+    count: usize,
+    clear: (f64, f64),
+    offset: f64,
+    start: &StartPose,
+    goal: (f64, f64),
+    rng: &mut ChaCha8Rng,
+) -> Vec<(f64, f64)> {
+    let (distance, (ux, uy)) = line_to_goal(start, goal);
+    let (first, last) = (clear.0, distance - clear.1);
+    (0..count)
+        .map(|_| {
+            let along = if last > first {
+                rng.gen_range(first..=last)
+            } else {
+                0.5 * (first + last)
+            };
+            let across = rng.gen_range(-1.0..=1.0) * offset;
+            (
+                start.x + along * ux - across * uy,
+                start.y + along * uy + across * ux,
+            )
+        })
+        .collect()
+}
+
+/// Adds `f(x, y)` to each of the `n` x `n` heights: sample (i, j) at index `j * n + i` lies at
+/// ((i - c) * spacing, (j - c) * spacing), c = (n - 1) / 2 (Bullet centres the grid on the origin).
+fn add_over_grid(heights: &mut [f32], n: usize, spacing: f64, f: impl Fn(f64, f64) -> f64) {
+    let c = 0.5 * (n - 1) as f64;
+    for j in 0..n {
+        let y = (j as f64 - c) * spacing;
+        for i in 0..n {
+            let x = (i as f64 - c) * spacing;
+            heights[j * n + i] += f(x, y) as f32;
         }
-        centres
     }
 }
 
@@ -328,6 +529,7 @@ impl TerrainDistribution {
             size("terrain.rough.spacing", r.spacing)?;
             check_range("terrain.rough.margin", r.margin, 0.0, MAX_OBSTACLE_SIZE)?;
             r.craters.validate()?;
+            r.ridges.validate()?;
             friction("terrain.rough.friction", r.friction)?;
         }
         Ok(())
@@ -356,6 +558,7 @@ impl TerrainDistribution {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut world = base.clone();
         let mut craters = Vec::new();
+        let mut ridges = Vec::new();
         if let Some(r) = &self.rough {
             // The lattice seeds first, so that the pegs' draws do not move them.
             let (bumps, hills) = (rng.gen::<u64>(), rng.gen::<u64>());
@@ -396,6 +599,12 @@ impl TerrainDistribution {
                 y,
                 radius: r.craters.radius,
             }));
+            // The ridges on a third stream: they move no hill, crater or peg.
+            let mut ridge_rng = ChaCha8Rng::seed_from_u64(hills);
+            ridge_rng.set_stream(2);
+            ridges = r
+                .ridges
+                .raise(&mut heights, n, r.spacing, start, goal, &mut ridge_rng);
             world.ground = Ground::Heightfield(Heightfield {
                 rows: n,
                 columns: n,
@@ -446,7 +655,11 @@ impl TerrainDistribution {
                 }
             }
         }
-        Ok(Layout { world, craters })
+        Ok(Layout {
+            world,
+            craters,
+            ridges,
+        })
     }
 }
 
@@ -457,6 +670,8 @@ pub struct Layout {
     pub world: WorldSpec,
     /// The craters sunk into the rough ground (each to the top of its wall).
     pub craters: Vec<Disc>,
+    /// The ridges' crest lines.
+    pub ridges: Vec<Segment>,
 }
 
 /// A disc on the plane: centre (x, y) and radius, metres.
@@ -514,6 +729,131 @@ impl Disc {
     }
 }
 
+/// The points within `radius` of a segment: a ridge's footprint, widened by its clearance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capsule {
+    /// The middle line.
+    pub segment: Segment,
+    /// Radius.
+    pub radius: f64,
+}
+
+/// Corners of the polygon around each end of a [`Capsule`] that [`Capsule::route_distance`] goes
+/// around: the way is at most tan(pi / n) / (pi / n) - 1 = 0.08 % longer than around the round ends.
+const CAPSULE_CORNERS: usize = 64;
+
+impl Capsule {
+    /// (x, y) lies inside.
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        self.segment.distance_to((x, y)) < self.radius
+    }
+
+    /// The length of the shortest way from `p` to `g` that does not cross the capsule's inside
+    /// (rounded to a polygon whose sides touch its round ends): the straight line where that is
+    /// clear, else the shorter of the two ways around the convex hull of the capsule, `p` and `g`.
+    /// A point inside first leaves the capsule straight away from its middle line.
+    pub fn route_distance(&self, p: (f64, f64), g: (f64, f64)) -> f64 {
+        if self.radius <= 0.0 {
+            return (g.0 - p.0).hypot(g.1 - p.1);
+        }
+        let n = CAPSULE_CORNERS;
+        let step = std::f64::consts::TAU / n as f64;
+        let corner = self.radius / (0.5 * step).cos();
+        // Points leave to just beyond the corners' radius: outside the polygon, never on a corner.
+        let (p, out_p) = self.leave(p, corner * (1.0 + 1e-9));
+        let (g, out_g) = self.leave(g, corner * (1.0 + 1e-9));
+        let mut points: Vec<(f64, f64)> = [self.segment.a, self.segment.b]
+            .iter()
+            .flat_map(|&(cx, cy)| {
+                (0..n).map(move |k| {
+                    let t = (k as f64 + 0.5) * step;
+                    (cx + corner * t.cos(), cy + corner * t.sin())
+                })
+            })
+            .collect();
+        points.push(p);
+        points.push(g);
+        let hull = convex_hull(&points);
+        let at = |i: usize| hull.iter().position(|&h| h == i);
+        let straight = (g.0 - p.0).hypot(g.1 - p.1);
+        let around = match (at(2 * n), at(2 * n + 1)) {
+            // Both on the hull: the segment between them crosses the polygon unless they are
+            // neighbours, where one of the two ways is that segment.
+            (Some(i), Some(j)) => {
+                let edge = |k: usize| {
+                    let (a, b) = (points[hull[k]], points[hull[(k + 1) % hull.len()]]);
+                    (b.0 - a.0).hypot(b.1 - a.1)
+                };
+                let perimeter: f64 = (0..hull.len()).map(edge).sum();
+                let one: f64 = (0..(j + hull.len() - i) % hull.len())
+                    .map(|k| edge((i + k) % hull.len()))
+                    .sum();
+                one.min(perimeter - one).max(straight)
+            }
+            // One lies in the hull of the polygon and the other: the segment between them is clear.
+            _ => straight,
+        };
+        out_p + out_g + around
+    }
+
+    /// `q` moved straight away from the middle line to `radius` when nearer, and how far it moved.
+    fn leave(&self, q: (f64, f64), radius: f64) -> ((f64, f64), f64) {
+        let d = self.segment.distance_to(q);
+        if d >= radius {
+            return (q, 0.0);
+        }
+        let s = self.segment.nearest(q);
+        let (mut ux, mut uy) = (q.0 - s.0, q.1 - s.1);
+        if d > 0.0 {
+            (ux, uy) = (ux / d, uy / d);
+        } else {
+            // On the middle line: leave across it (to its left).
+            let (dx, dy) = (
+                self.segment.b.0 - self.segment.a.0,
+                self.segment.b.1 - self.segment.a.1,
+            );
+            let len = dx.hypot(dy);
+            (ux, uy) = if len > 0.0 {
+                (-dy / len, dx / len)
+            } else {
+                (1.0, 0.0)
+            };
+        }
+        ((s.0 + radius * ux, s.1 + radius * uy), radius - d)
+    }
+}
+
+/// The indices of `points`' convex hull, counterclockwise, without points on its sides (Andrew's
+/// monotone chain).
+fn convex_hull(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (pa, pb) = (points[a], points[b]);
+        pa.0.total_cmp(&pb.0).then(pa.1.total_cmp(&pb.1))
+    });
+    let cross = |o: usize, a: usize, b: usize| {
+        let (o, a, b) = (points[o], points[a], points[b]);
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    // The lower chain left to right, then the upper chain right to left; each drops its last
+    // point, the next chain's first.
+    let reversed: Vec<usize> = order.iter().rev().copied().collect();
+    let mut hull: Vec<usize> = Vec::with_capacity(points.len() + 1);
+    for sweep in [&order, &reversed] {
+        let floor = hull.len();
+        for &i in sweep {
+            while hull.len() >= floor + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], i) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(i);
+        }
+        hull.pop();
+    }
+    hull
+}
+
 /// The distance from `p` to `g` along the shortest way around the `discs`: exact for one disc (and
 /// for discs whose detours do not meet), otherwise the longest single-disc way, a lower bound.
 pub fn route_distance(p: (f64, f64), g: (f64, f64), discs: &[Disc]) -> f64 {
@@ -533,17 +873,62 @@ mod tests {
     /// `route_distance` (longer by at most a factor tan(pi / n) / (pi / n) along the rim).
     fn dijkstra_around(d: &Disc, p: (f64, f64), g: (f64, f64), n: usize) -> f64 {
         let r = d.radius / (std::f64::consts::PI / n as f64).cos() * (1.0 + 1e-12);
-        let mut pts = vec![p, g];
-        pts.extend((0..n).map(|k| {
+        let corners = (0..n).map(|k| {
             let a = std::f64::consts::TAU * k as f64 / n as f64;
             (d.x + r * a.cos(), d.y + r * a.sin())
-        }));
-        let clear = |a: (f64, f64), b: (f64, f64)| {
-            // The distance from the centre to the segment a-b, at least the radius.
-            let (vx, vy) = (b.0 - a.0, b.1 - a.1);
-            let t = (((d.x - a.0) * vx + (d.y - a.1) * vy) / (vx * vx + vy * vy)).clamp(0.0, 1.0);
-            (a.0 + t * vx - d.x).hypot(a.1 + t * vy - d.y) >= d.radius * (1.0 - 1e-12)
+        });
+        let centre = Segment {
+            a: (d.x, d.y),
+            b: (d.x, d.y),
         };
+        dijkstra(p, g, corners.collect(), |a, b| {
+            segments_apart(Segment { a, b }, centre) >= d.radius * (1.0 - 1e-12)
+        })
+    }
+
+    /// The same for a capsule: the corners of a polygon whose sides touch each round end.
+    fn dijkstra_around_capsule(c: &Capsule, p: (f64, f64), g: (f64, f64), n: usize) -> f64 {
+        let r = c.radius / (std::f64::consts::PI / n as f64).cos() * (1.0 + 1e-12);
+        let corners = [c.segment.a, c.segment.b].into_iter().flat_map(|(x, y)| {
+            (0..n).map(move |k| {
+                let a = std::f64::consts::TAU * k as f64 / n as f64;
+                (x + r * a.cos(), y + r * a.sin())
+            })
+        });
+        dijkstra(p, g, corners.collect(), |a, b| {
+            segments_apart(Segment { a, b }, c.segment) >= c.radius * (1.0 - 1e-12)
+        })
+    }
+
+    /// The least distance between two segments (0 where they cross).
+    fn segments_apart(s: Segment, t: Segment) -> f64 {
+        let side = |p: (f64, f64), q: (f64, f64), r: (f64, f64)| {
+            (q.0 - p.0) * (r.1 - p.1) - (q.1 - p.1) * (r.0 - p.0)
+        };
+        let crosses = side(s.a, s.b, t.a) * side(s.a, s.b, t.b) < 0.0
+            && side(t.a, t.b, s.a) * side(t.a, t.b, s.b) < 0.0;
+        if crosses {
+            return 0.0;
+        }
+        [
+            s.distance_to(t.a),
+            s.distance_to(t.b),
+            t.distance_to(s.a),
+            t.distance_to(s.b),
+        ]
+        .into_iter()
+        .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Dijkstra from `p` to `g` over `p`, `g` and `corners`, joined where `clear`.
+    fn dijkstra(
+        p: (f64, f64),
+        g: (f64, f64),
+        corners: Vec<(f64, f64)>,
+        clear: impl Fn((f64, f64), (f64, f64)) -> bool,
+    ) -> f64 {
+        let mut pts = vec![p, g];
+        pts.extend(corners);
         let mut best = vec![f64::INFINITY; pts.len()];
         let mut done = vec![false; pts.len()];
         best[0] = 0.0;
@@ -601,6 +986,61 @@ mod tests {
         let inside = d.route_distance((1.0, -4.5), g);
         let want = 0.5 + 2.0 * (std::f64::consts::PI - (0.4f64).acos()) + 21.0f64.sqrt();
         assert!((inside - want).abs() < 1e-12, "{inside} {want}");
+    }
+
+    #[test]
+    fn the_way_around_a_capsule_is_the_shortest_one() {
+        let c = Capsule {
+            segment: Segment {
+                a: (-2.0, -5.0),
+                b: (3.0, -7.0),
+            },
+            radius: 1.5,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut blocked = 0;
+        for _ in 0..40 {
+            let mut outside = || loop {
+                let q = (rng.gen_range(-8.0..9.0), rng.gen_range(-14.0..2.0));
+                if !c.contains(q.0, q.1) {
+                    return q;
+                }
+            };
+            let (p, g) = (outside(), outside());
+            let want = dijkstra_around_capsule(&c, p, g, 720);
+            let got = c.route_distance(p, g);
+            // Around 64-cornered ends the way is at most 0.08 % of an arc (< 8 m here) longer.
+            assert!(
+                got >= want - 1e-6 && got - want < 6e-3,
+                "{p:?} {g:?}: {got} vs {want}"
+            );
+            blocked += usize::from(got > (g.0 - p.0).hypot(g.1 - p.1) + 1e-9);
+        }
+        assert!((10..35).contains(&blocked), "{blocked} of 40 went around");
+        // Straight through the middle of a ridge across the way: around either end, each a tangent,
+        // the arc outside the end and a tangent.
+        let ridge = Capsule {
+            segment: Segment {
+                a: (-3.0, -6.0),
+                b: (3.0, -6.0),
+            },
+            radius: 1.5,
+        };
+        let (p, g) = ((0.0, -1.0), (0.0, -11.0));
+        let d = 34.0f64.sqrt();
+        let outer = std::f64::consts::TAU - 2.0 * (5.0f64 / 3.0).atan();
+        let want = 2.0 * (d * d - 2.25).sqrt() + 1.5 * (outer - 2.0 * (1.5 / d).acos());
+        let got = ridge.route_distance(p, g);
+        assert!(got >= want - 1e-9 && got - want < 4e-3, "{got} {want}");
+        // From inside, straight out first: 0.5 m from the middle line, out to the polygon's corners'
+        // radius (1 m and a little), then around.
+        let corner = 1.5 / (std::f64::consts::PI / CAPSULE_CORNERS as f64).cos();
+        let inside = ridge.route_distance((0.0, -5.5), g);
+        let want = (corner - 0.5) + dijkstra_around_capsule(&ridge, (0.0, -6.0 + corner), g, 720);
+        assert!(
+            inside >= want - 1e-6 && inside - want < 4e-3,
+            "{inside} {want}"
+        );
     }
 
     fn start() -> StartPose {
@@ -684,6 +1124,70 @@ mod tests {
     }
 
     #[test]
+    fn a_ridge_lies_across_the_straight_line_clear_of_start_and_goal() {
+        let ridges = Ridges {
+            count: 1,
+            ..Ridges::default()
+        };
+        let t = TerrainDistribution {
+            pegs: None,
+            rough: Some(RoughGround {
+                amplitude: 0.0,
+                hills_amplitude: 0.0,
+                ridges,
+                ..RoughGround::default()
+            }),
+        };
+        let start = StartPose {
+            x: 0.0,
+            y: 0.0,
+            z: 0.5,
+            yaw: 0.0,
+        };
+        let foot = 0.5 * ridges.crest + ridges.wall;
+        for seed in 0..20 {
+            let layout = t
+                .layout(&WorldSpec::default(), &start, (0.0, -12.0), seed)
+                .unwrap();
+            let Ground::Heightfield(h) = &layout.world.ground else {
+                panic!("rough ground expected")
+            };
+            let [s] = layout.ridges[..] else {
+                panic!("one ridge expected")
+            };
+            // The crest runs across the line (along x), `length` long, its middle at most `offset`
+            // off the line, between `start_clear` and 12 m - `goal_clear` along it (-y).
+            assert!((s.a.1 - s.b.1).abs() < 1e-12, "seed {seed}: {s:?}");
+            assert!(((s.a.0 - s.b.0).abs() - ridges.length).abs() < 1e-12);
+            assert!((0.5 * (s.a.0 + s.b.0)).abs() <= ridges.offset);
+            let along = -s.a.1;
+            assert!(along >= ridges.start_clear && along <= 12.0 - ridges.goal_clear);
+            let n = h.rows;
+            let c = 0.5 * (n - 1) as f64;
+            let mut top = 0;
+            for j in 0..n {
+                for i in 0..n {
+                    let p = ((i as f64 - c) * h.scale[0], (j as f64 - c) * h.scale[1]);
+                    let (d, z) = (s.distance_to(p), f64::from(h.heights[j * n + i]));
+                    if d <= 0.5 * ridges.crest {
+                        assert_eq!(z, ridges.height as f32 as f64, "seed {seed} at {p:?}");
+                        top += 1;
+                    } else if d >= foot {
+                        assert_eq!(z, 0.0, "seed {seed} at {p:?}");
+                    } else {
+                        assert!(z > 0.0 && z < ridges.height, "seed {seed} at {p:?}: {z}");
+                    }
+                }
+            }
+            // The crest's samples: 6.5 m x 0.5 m at 0.125 m spacing, about 53 x 4 of them.
+            assert!(
+                (150..=300).contains(&top),
+                "seed {seed}: {top} samples on the crest"
+            );
+        }
+    }
+
+    #[test]
     fn bad_values_are_one_line_naming_the_field() {
         let mut t = TerrainDistribution {
             pegs: Some(PegField {
@@ -705,7 +1209,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("terrain.pegs") && e.contains("obstacles"), "{e}");
-        for craters in [
+        let craters = [
             Craters {
                 count: MAX_CRATERS + 1,
                 ..Craters::default()
@@ -722,16 +1226,37 @@ mod tests {
                 clearance: -1.0,
                 ..Craters::default()
             },
-        ] {
+        ]
+        .map(|craters| RoughGround {
+            craters,
+            ..RoughGround::default()
+        });
+        let ridges = [
+            Ridges {
+                count: MAX_RIDGES + 1,
+                ..Ridges::default()
+            },
+            Ridges {
+                height: f64::INFINITY,
+                ..Ridges::default()
+            },
+            Ridges {
+                wall: -0.5,
+                ..Ridges::default()
+            },
+        ]
+        .map(|ridges| RoughGround {
+            ridges,
+            ..RoughGround::default()
+        });
+        let bad = craters.into_iter().map(|r| (r, "craters"));
+        for (rough, key) in bad.chain(ridges.into_iter().map(|r| (r, "ridges"))) {
             let t = TerrainDistribution {
                 pegs: None,
-                rough: Some(RoughGround {
-                    craters,
-                    ..RoughGround::default()
-                }),
+                rough: Some(rough),
             };
             let e = t.validate().unwrap_err().to_string();
-            assert!(e.contains("terrain.rough.craters."), "{e}");
+            assert!(e.contains(&format!("terrain.rough.{key}.")), "{e}");
             assert!(!e.contains('\n'));
         }
     }

@@ -764,34 +764,46 @@ fn the_rough_task_ends_an_episode_whose_head_leaves_the_ground() {
 /// The goal of [`one_crater_ahead`]'s episode, 12 m ahead of the start (-y).
 const CRATER_GOAL: (f64, f64) = (0.0, -12.0);
 
-/// A 10-joint snake reset on flat rough ground (no bumps, no hills) with one crater, `craters`
-/// (count 1, on the line), across the line to [`CRATER_GOAL`]: its centre 6-8 m ahead. The unsteered
-/// wave crawls ahead into it.
-fn one_crater_ahead(craters: Craters, progress_around_craters: bool) -> SnakeEnv {
+/// A 10-joint snake reset on flat rough ground (no bumps, no hills) with what `set` adds to its
+/// config, facing [`CRATER_GOAL`] 12 m ahead from the origin at height `z`; 600-step episodes.
+fn on_flat_rough_ground(z: f64, set: impl FnOnce(&mut EnvConfig)) -> SnakeEnv {
     let mut config = EnvConfig::rough_task(Preset::Paper, 10);
     let rough = config.terrain.as_mut().unwrap().rough.as_mut().unwrap();
     (rough.amplitude, rough.hills_amplitude) = (0.0, 0.0);
-    rough.craters = Craters {
-        count: 1,
-        offset: 0.0,
-        ..craters
-    };
-    config.reward.progress_around_craters = progress_around_craters;
+    set(&mut config);
     config.max_episode_steps = 600;
     let mut e = env(config);
     let options = ResetOptions {
         start: Some(StartPose {
             x: 0.0,
             y: 0.0,
-            // Bullet puts the grid's z = 0 halfway between its lowest and highest sample: the flat
-            // ground lies half the crater's depth up.
-            z: 0.5 + 0.5 * craters.depth,
+            z,
             yaw: 0.0,
         }),
         goal: Some(CRATER_GOAL),
     };
     e.reset(Some(1), options).unwrap();
     e
+}
+
+/// The rough ground's own keys in `config`.
+fn rough_of(config: &mut EnvConfig) -> &mut RoughGround {
+    config.terrain.as_mut().unwrap().rough.as_mut().unwrap()
+}
+
+/// [`on_flat_rough_ground`] with one crater, `craters` (count 1, on the line), across the line to
+/// the goal: its centre 6-8 m ahead. The unsteered wave crawls ahead into it.
+fn one_crater_ahead(craters: Craters, progress_around_craters: bool) -> SnakeEnv {
+    // Bullet puts the grid's z = 0 halfway between its lowest and highest sample: the flat ground
+    // lies half the crater's depth up.
+    on_flat_rough_ground(0.5 + 0.5 * craters.depth, |config| {
+        rough_of(config).craters = Craters {
+            count: 1,
+            offset: 0.0,
+            ..craters
+        };
+        config.reward.progress_around_craters = progress_around_craters;
+    })
 }
 
 #[test]
@@ -852,4 +864,39 @@ fn progress_around_craters_measures_the_way_around_them() {
     assert!((progress - (around(origin) - around(e.position))).abs() < 1e-9);
     // In the crater the way out and around is metres longer than the straight line.
     assert!(longest_detour > 2.0, "{longest_detour}");
+}
+
+#[test]
+fn progress_around_ridges_measures_the_way_around_them() {
+    // One ridge across the line to a goal 12 m ahead on flat rough ground; the unsteered wave
+    // crawls up to it. The progress terms add up to the way around the ridge from the start less
+    // that from where the head ends (it telescopes), not to the straight distances. The flat
+    // ground lies half the ridge's height (0.75 m) below the grid's z = 0 and a start may not lie
+    // below z = 0: the body drops 0.5 m.
+    let mut e = on_flat_rough_ground(0.0, |config| {
+        rough_of(config).ridges = Ridges {
+            count: 1,
+            offset: 0.0,
+            ..Ridges::default()
+        };
+        config.reward.progress_around_ridges = true;
+    });
+    let ridge = e.route_around_ridges.clone();
+    assert_eq!(ridge.len(), 1);
+    // Across the line (along x), its middle on it, 3-10 m ahead; the footprint 0.75 m and the
+    // clearance 1 m either side of its crest line.
+    let (c, goal) = (ridge[0], CRATER_GOAL);
+    assert!(c.segment.a.1 == c.segment.b.1 && c.segment.a.0 == -c.segment.b.0);
+    assert!((-10.0..=-3.0).contains(&c.segment.a.1) && c.radius == 1.75);
+    let origin = e.origin;
+    let around = |p: (f64, f64)| c.route_distance(p, goal);
+    let straight = |p: (f64, f64)| (goal.0 - p.0).hypot(goal.1 - p.1);
+    assert!(around(origin) > straight(origin) + 0.5);
+    let mut progress = 0.0;
+    for _ in 0..450 {
+        let s = e.step(&[0.0f32, 0.0, 0.0]).unwrap();
+        progress += s.info.reward_terms.progress;
+    }
+    assert!((progress - (around(origin) - around(e.position))).abs() < 1e-9);
+    assert!((progress - (straight(origin) - straight(e.position))).abs() > 0.5);
 }

@@ -52,8 +52,9 @@ class SnakeEnv(gymnasium.Env):
 
     **Reward**: minus the planar head-goal distance (times ``reward["distance_weight"]``, 1); 100
     instead once the head is within ``goal_radius`` of the goal. Optional terms (``reward={...}``, off
-    by default): progress toward the goal (with ``progress_around_craters``, along the shortest way
-    around the rough ground's craters), a smoothness penalty on the change of the action between
+    by default): progress toward the goal (with ``progress_around_craters`` or
+    ``progress_around_ridges``, along the shortest way around the rough ground's craters or ridges),
+    a smoothness penalty on the change of the action between
     steps, an energy penalty on the motors' work. Every term is reported in ``info``, with the
     episode's mechanical ``work`` (J), ``path_length`` and ``displacement`` (m) so far.
 
@@ -362,7 +363,9 @@ class SnakeRoughEnv(SnakeGoalEnv):
       the ground's highest point within 1.5 m of the origin. No crater by default; ``{"rough":
       {"craters": {"count": 1}}}`` sinks one across the straight line to the goal, and
       ``"terminate": True`` among its keys ends an episode once the head is over its floor
-      (docs/tasks.md, "A crater in the way").
+      (docs/tasks.md, "A crater in the way"). No ridge by default; ``{"rough": {"ridges": {"count":
+      1}}}`` raises one, 1.5 m high and 6 m long, across the straight line to the goal (docs/tasks.md,
+      "A ridge across the way").
     - **Episode end**: the goal reached (terminated) or 900 env steps, 30 s (truncated); the head
       beyond the edge of the ground's square, falling off the world, ends it too (terminated,
       ``info["success"]`` False).
