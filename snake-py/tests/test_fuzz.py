@@ -47,10 +47,15 @@ plausible = {
     "action_scale": st.floats(0.01, 3),
     "observation": st.sampled_from(["paper", "extended", "terrain"]),
     "action": st.fixed_dictionaries({"mode": st.sampled_from(["joints", "gait", "residual"])}),
-    "reward": st.dictionaries(
-        st.sampled_from(["distance_weight", "progress_weight", "smoothness_weight", "energy_weight"]),
-        st.floats(-3, 3),
-        max_size=3,
+    "reward": st.one_of(
+        st.dictionaries(
+            st.sampled_from(["distance_weight", "progress_weight", "smoothness_weight", "energy_weight"]),
+            st.floats(-3, 3),
+            max_size=3,
+        ),
+        st.fixed_dictionaries(
+            {"progress_around_craters": st.booleans(), "progress_around_ridges": st.booleans()}
+        ),
     ),
     "start": st.fixed_dictionaries({"z": st.floats(0, 1)}),
     "goal_distribution": st.one_of(
@@ -80,6 +85,8 @@ plausible = {
             },
             {"rough": {"craters": {"count": 2, "radius": 2.0, "depth": 1.0, "wall": 0.5}}},
             {"rough": {"craters": {"count": 1, "terminate": True}}},
+            {"rough": {"ridges": {"count": 2, "length": 3.0, "clearance": 0.5}}},
+            {"rough": {"craters": {"count": 1}, "ridges": {"count": 1}}},
         ]
     ),
     "world": st.sampled_from(
