@@ -548,7 +548,7 @@ impl SnakeEnv {
             obs[1],
             self.config.reward.distance_precision,
         );
-        self.progress_distance = self.progress_distance_at(self.origin);
+        self.progress_distance = self.progress_distance_at(self.origin, self.distance);
         self.snake = Some(body);
         self.episode_world = keep;
         self.phase = Phase::Running;
@@ -592,12 +592,7 @@ impl SnakeEnv {
         let weights = self.config.reward;
         let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
         let success = distance < self.config.goal_radius;
-        let progress_distance =
-            if self.route_around.is_empty() && self.route_around_ridges.is_empty() {
-                distance
-            } else {
-                self.progress_distance_at(p)
-            };
+        let progress_distance = self.progress_distance_at(p, distance);
         let terms = RewardTerms::compute(
             &weights,
             &RewardInputs {
@@ -641,11 +636,11 @@ impl SnakeEnv {
         })
     }
 
-    /// The distance the progress term measures with the base at `p`: the straight one (the
-    /// latest [`SnakeEnv::distance`]) unless it goes around craters or ridges.
-    fn progress_distance_at(&self, p: (f64, f64)) -> f64 {
+    /// The distance the progress term measures with the base at `p`: `straight`, the goal distance
+    /// there, unless it goes around craters or ridges.
+    fn progress_distance_at(&self, p: (f64, f64), straight: f64) -> f64 {
         if self.route_around.is_empty() && self.route_around_ridges.is_empty() {
-            self.distance
+            straight
         } else {
             self.route_around_ridges
                 .iter()

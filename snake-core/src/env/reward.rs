@@ -172,7 +172,7 @@ pub struct RewardInputs<'a> {
     /// Distance to the goal after the step ([`paper_distance`]).
     pub distance: f64,
     /// The distance the progress term measures after the step: `distance`, or with
-    /// `progress_around_craters` the way around the craters.
+    /// `progress_around_craters` or `progress_around_ridges` the way around the craters or ridges.
     pub progress_distance: f64,
     /// The same before the step.
     pub previous_progress_distance: f64,

@@ -742,6 +742,20 @@ pub struct Capsule {
 /// around: the way is at most tan(pi / n) / (pi / n) - 1 = 0.08 % longer than around the round ends.
 const CAPSULE_CORNERS: usize = 64;
 
+/// The directions of the corners from each end's centre, (cos, sin) of (k + 1/2) 2 pi / n: the same
+/// for every capsule, so computed once rather than at every env step.
+fn capsule_corner_directions() -> &'static [(f64, f64); CAPSULE_CORNERS] {
+    static DIRECTIONS: std::sync::OnceLock<[(f64, f64); CAPSULE_CORNERS]> =
+        std::sync::OnceLock::new();
+    DIRECTIONS.get_or_init(|| {
+        let step = std::f64::consts::TAU / CAPSULE_CORNERS as f64;
+        std::array::from_fn(|k| {
+            let t = (k as f64 + 0.5) * step;
+            (t.cos(), t.sin())
+        })
+    })
+}
+
 impl Capsule {
     /// (x, y) lies inside.
     pub fn contains(&self, x: f64, y: f64) -> bool {
@@ -762,13 +776,13 @@ impl Capsule {
         // Points leave to just beyond the corners' radius: outside the polygon, never on a corner.
         let (p, out_p) = self.leave(p, corner * (1.0 + 1e-9));
         let (g, out_g) = self.leave(g, corner * (1.0 + 1e-9));
+        let directions = capsule_corner_directions();
         let mut points: Vec<(f64, f64)> = [self.segment.a, self.segment.b]
             .iter()
             .flat_map(|&(cx, cy)| {
-                (0..n).map(move |k| {
-                    let t = (k as f64 + 0.5) * step;
-                    (cx + corner * t.cos(), cy + corner * t.sin())
-                })
+                directions
+                    .iter()
+                    .map(move |&(c, s)| (cx + corner * c, cy + corner * s))
             })
             .collect();
         points.push(p);
