@@ -17,12 +17,15 @@ use serde::{Deserialize, Serialize};
 
 pub use action::{
     ActionConfig, ActionMode, MAX_GAIT_AMPLITUDE, MAX_GAIT_FREQUENCY, MAX_GAIT_STEERING,
-    MAX_RESIDUAL_SCALE,
+    MAX_RESIDUAL_SCALE, STEER_RESIDUAL_GAIN,
 };
 pub use config::{
     EnvConfig, GoalDistribution, ObservationLayout, StartDistribution, Task, MAX_GOAL_DISTANCE,
 };
-pub use height_map::{HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING};
+pub use height_map::{
+    HeightMap, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING, MAX_HEIGHT_MAP_SIDE,
+    MAX_HEIGHT_MAP_SPACING,
+};
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
@@ -533,11 +536,12 @@ impl SnakeEnv {
             snake,
             self.goal,
             self.wave_phase(),
-            &self.ground,
+            (&self.ground, &self.config.height_map),
             &mut self.joints,
             obs,
         )?;
         finite_output(obs, 0.0, 0.0)?;
+        self.driver.observe(obs, self.joints.positions.len());
         self.origin = (base.pose.position.x, base.pose.position.y);
         self.position = self.origin;
         self.work = 0.0;
@@ -727,10 +731,11 @@ impl SnakeEnv {
             snake,
             self.goal,
             phase.filter(|_| self.config.observes_wave_phase()),
-            &self.ground,
+            (&self.ground, &self.config.height_map),
             &mut self.joints,
             obs,
         )?;
+        driver.observe(obs, self.joints.positions.len());
         Ok((base, work))
     }
 

@@ -46,7 +46,10 @@ plausible = {
     "physics_steps_per_env_step": st.integers(1, 12),
     "action_scale": st.floats(0.01, 3),
     "observation": st.sampled_from(["paper", "extended", "terrain"]),
-    "action": st.fixed_dictionaries({"mode": st.sampled_from(["joints", "gait", "residual"])}),
+    "action": st.fixed_dictionaries(
+        {"mode": st.sampled_from(["joints", "gait", "residual"])}, optional={"steer_residual": st.booleans()}
+    ),
+    "height_map": st.fixed_dictionaries({"side": st.integers(-1, 17), "spacing": st.floats(-0.5, 2.5)}),
     "reward": st.one_of(
         st.dictionaries(
             st.sampled_from(["distance_weight", "progress_weight", "smoothness_weight", "energy_weight"]),

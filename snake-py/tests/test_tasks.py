@@ -344,3 +344,73 @@ def test_progress_around_craters_changes_progress_only_where_a_crater_is_in_the_
     with pytest.raises(TypeError, match="^reward.progress_around_craters: invalid type") as error:
         snakesim.SnakeRoughEnv(reward={"progress_around_craters": 1.5})
     assert "\n" not in str(error.value)
+
+
+def test_a_steer_residual_agents_baselines_drive_the_plain_gait_on_its_episodes(tmp_path):
+    """``action.steer_residual`` (the steering action corrects baseline:steer's): ``--env-from`` such
+    a model runs the baselines on the same env without it, so that steer is steer; bad uses are one
+    line."""
+    from safetensors import safe_open
+    from safetensors.numpy import load_file, save_file
+
+    source = ROOT / "models" / "goal-10.safetensors"
+    with safe_open(str(source), "np") as f:
+        meta = dict(f.metadata())
+    recorded = json.loads(meta["env_config"])
+    recorded["action"]["steer_residual"] = True
+    model = tmp_path / "residual-goal-10.safetensors"
+    save_file(load_file(str(source)), str(model), metadata={**meta, "env_config": json.dumps(recorded)})
+
+    agent, baseline = load_agent(str(model)), load_agent("baseline:steer", env_from=str(model))
+    assert agent.env_kwargs["action"]["steer_residual"] is True
+    assert "steer_residual" not in baseline.env_kwargs["action"]
+    assert {**baseline.env_kwargs, "action": None} == {**agent.env_kwargs, "action": None}
+    assert snakesim.envs.env.make_env(**agent.env_kwargs).config["action"]["steer_residual"] is True
+    assert "steer_residual" not in snakesim.envs.env.make_env(**baseline.env_kwargs).config["action"]
+
+    # Zero corrections steer as steer does: the first step (before rounding of the arctangent, numpy's
+    # float32 one against libm's, can set them apart) gives the same observation.
+    residual = snakesim.envs.env.make_env(**agent.env_kwargs)
+    plain = snakesim.envs.env.make_env(**baseline.env_kwargs)
+    obs_r, _ = residual.reset(seed=3)
+    obs_p, _ = plain.reset(seed=3)
+    np.testing.assert_array_equal(obs_r, obs_p)
+    obs_r, *_ = residual.step(np.zeros(3, np.float32))
+    obs_p, *_ = plain.step(baseline.policy.act(obs_p)[0])
+    np.testing.assert_array_equal(obs_r, obs_p)
+
+    for action, kind, message in (
+        ({"mode": "joints", "steer_residual": True}, ValueError, "steer_residual: needs action mode 'gait'"),
+        ({"mode": "gait", "steer_residual": "yes"}, TypeError, "action.steer_residual: invalid type"),
+    ):
+        with pytest.raises(kind, match=message) as error:
+            snakesim.SnakeGoalEnv(joints=5, action=action)
+        assert "\n" not in str(error.value)
+    with pytest.raises(ValueError, match="observation 'extended' or 'terrain'"):
+        snakesim.SnakeEnv(joints=5, action={"mode": "gait", "steer_residual": True})
+
+
+def test_a_larger_height_map_sees_farther_and_bad_maps_are_one_line():
+    """``height_map={"side": 9}``: the terrain observation's map is a 9 x 9 grid whose inner 5 x 5 points
+    are the default map's; bad grids are one line naming the key."""
+    small = snakesim.SnakeRoughEnv(joints=10, observation="terrain")
+    large = snakesim.SnakeRoughEnv(joints=10, observation="terrain", height_map={"side": 9})
+    assert large.observation_space.shape[0] == small.observation_space.shape[0] - 25 + 81
+    assert large.config["height_map"] == {"side": 9, "spacing": 0.75}
+    assert "height_map" not in small.config
+    obs_s, _ = small.reset(seed=11)
+    obs_l, _ = large.reset(seed=11)
+    for _ in range(20):
+        np.testing.assert_array_equal(obs_s[:-25], obs_l[:-81])
+        np.testing.assert_array_equal(obs_s[-25:].reshape(5, 5), obs_l[-81:].reshape(9, 9)[2:7, 2:7])
+        obs_s, *_ = small.step(np.array([0.5, 0.0, 0.0], np.float32))
+        obs_l, *_ = large.step(np.array([0.5, 0.0, 0.0], np.float32))
+    for height_map, kind, message in (
+        ({"side": 8}, ValueError, "height_map.side: must be odd, from 1 to 15, got 8"),
+        ({"spacing": -1.0}, ValueError, "height_map.spacing: must be in"),
+        ({"side": "nine"}, TypeError, "height_map.side: invalid type"),
+        ({"reach": 3.0}, ValueError, "height_map.reach: unknown field `reach`"),
+    ):
+        with pytest.raises(kind, match=message) as error:
+            snakesim.SnakeRoughEnv(observation="terrain", height_map=height_map)
+        assert "\n" not in str(error.value)

@@ -574,6 +574,8 @@ pub fn env_keyword_defaults(task: Task) -> Map<String, Value> {
     map.entry("world").or_insert(Value::Null);
     // No random terrain.
     map.entry("terrain").or_insert(Value::Null);
+    // The default height map (left out of serialised configs while it is the default).
+    map.entry("height_map").or_insert(Value::Null);
     map
 }
 

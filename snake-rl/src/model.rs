@@ -181,8 +181,18 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
                     c.action_scale
                 ),
                 snake_core::env::ActionMode::Gait => format!(
-                    "gait: steering {:?} rad, amplitude {:?} rad, frequency {:?} Hz, each from [-1, 1]",
-                    c.action.steering, c.action.amplitude, c.action.frequency
+                    "gait: steering {:?} rad, amplitude {:?} rad, frequency {:?} Hz, each from [-1, 1]{}",
+                    c.action.steering,
+                    c.action.amplitude,
+                    c.action.frequency,
+                    if c.action.steer_residual {
+                        format!(
+                            "; the steering corrects baseline:steer's: clip(steer + {} x action, -1, 1)",
+                            snake_core::env::STEER_RESIDUAL_GAIN
+                        )
+                    } else {
+                        String::new()
+                    }
                 ),
                 snake_core::env::ActionMode::Residual => format!(
                     "residual: {} corrections in [-1, 1] x {} rad added to the default wave, head to tail",

@@ -16,6 +16,10 @@ pub const MAX_GAIT_FREQUENCY: f64 = 2.0;
 pub const MAX_GAIT_STEERING: f64 = 0.8;
 /// Largest per-joint correction of the residual mode, radians.
 pub const MAX_RESIDUAL_SCALE: f64 = 1.5;
+/// With [`ActionConfig::steer_residual`], the steering action's weight in the sum
+/// `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`: 2, so that whatever `baseline:steer` asks
+/// (at most 1 either way), the action can still reach any steering.
+pub const STEER_RESIDUAL_GAIN: f64 = 2.0;
 
 /// What an action sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -69,6 +73,15 @@ pub struct ActionConfig {
     pub frequency: [f64; 2],
     /// Residual mode: the largest correction added to the wave's target, radians (0.3).
     pub residual_scale: f64,
+    /// Gait mode (false): the steering action corrects `baseline:steer`'s steering instead of
+    /// setting it (residual policy learning: the policy starts as the hand controller and learns
+    /// where to depart from it). The steering is `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`,
+    /// `steer = clip(-bearing, -1, 1)` with the goal's bearing read from the observation the
+    /// action answers (radians, 0 ahead, positive to the left), as `baseline:steer` reads it; so
+    /// actions of 0 drive exactly `baseline:steer`. Needs an observation with the goal vector
+    /// (`extended` or `terrain`). Left out of written configurations while false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub steer_residual: bool,
 }
 
 impl Default for ActionConfig {
@@ -79,6 +92,7 @@ impl Default for ActionConfig {
             amplitude: [0.2, 0.6],
             frequency: [0.4, 1.0],
             residual_scale: 0.3,
+            steer_residual: false,
         }
     }
 }
@@ -126,6 +140,15 @@ impl ActionConfig {
         }
         Ok(())
     }
+}
+
+/// `baseline:steer`'s steering action for an extended or terrain observation `obs` of a body of
+/// `joints` joints: `clip(-atan2(gx, -gy), -1, 1)` of the goal vector (gx, gy) in the head frame
+/// (its -y ahead, +x to the left), in `float32` as the Python baseline computes it from the same
+/// values (`snakesim.agents.baselines`), so that a zero correction drives it step for step.
+pub(crate) fn goal_steering(obs: &[f32], joints: usize) -> f64 {
+    let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
+    f64::from((-gx.atan2(-gy)).clamp(-1.0, 1.0))
 }
 
 /// `low + (high - low) * (a + 1) / 2` for `a` in [-1, 1].
@@ -179,6 +202,8 @@ pub(crate) struct Driver {
     wave: Wave,
     /// The clipped action of the current env step.
     action: Vec<f64>,
+    /// With `steer_residual`: `baseline:steer`'s steering for the last observation.
+    goal_steering: f64,
 }
 
 impl Driver {
@@ -208,6 +233,7 @@ impl Driver {
             wave,
             // Sized once: stepping stays allocation-free.
             action: Vec::with_capacity(config.action_dim()),
+            goal_steering: 0.0,
         }
     }
 
@@ -217,13 +243,26 @@ impl Driver {
         self.action.clear();
     }
 
+    /// With `steer_residual`, what `baseline:steer` would steer for the observation just written
+    /// (`obs`, of an extended or terrain layout of a body of `joints` joints); a no-op otherwise.
+    pub fn observe(&mut self, obs: &[f32], joints: usize) {
+        if self.config.steer_residual {
+            self.goal_steering = goal_steering(obs, joints);
+        }
+    }
+
     /// Takes this env step's action, clipped to [-1, 1] (finite values; checked by the caller).
     pub fn set_action(&mut self, action: impl Iterator<Item = f64>) {
         self.action.clear();
         self.action.extend(action.map(|a| a.clamp(-1.0, 1.0)));
         if self.config.mode == ActionMode::Gait {
             let c = &self.config;
-            let steering = lerp(c.steering, self.action[0]);
+            let steering_action = if c.steer_residual {
+                (self.goal_steering + STEER_RESIDUAL_GAIN * self.action[0]).clamp(-1.0, 1.0)
+            } else {
+                self.action[0]
+            };
+            let steering = lerp(c.steering, steering_action);
             let amplitude = lerp(c.amplitude, self.action[1]);
             let frequency = lerp(c.frequency, self.action[2]);
             match &mut self.wave {

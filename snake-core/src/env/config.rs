@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::action::{ActionConfig, ActionMode};
-use super::height_map::HEIGHT_MAP_LEN;
+use super::height_map::HeightMap;
 use super::reward::RewardConfig;
 use super::terrain::{PegField, RoughGround, TerrainDistribution};
 use crate::config::{Preset, SnakeConfig};
@@ -63,6 +63,10 @@ pub struct EnvConfig {
     pub action: ActionConfig,
     /// What the observation holds.
     pub observation: ObservationLayout,
+    /// The terrain observation's height map: its grid's points per side and their spacing (5 and
+    /// 0.75 m). Left out of written configurations while it is the default.
+    #[serde(skip_serializing_if = "HeightMap::is_default")]
+    pub height_map: HeightMap,
     /// Optional reward terms and the success reward.
     pub reward: RewardConfig,
 }
@@ -83,6 +87,7 @@ impl Default for EnvConfig {
             action_scale: 1.0,
             action: ActionConfig::default(),
             observation: ObservationLayout::Paper,
+            height_map: HeightMap::default(),
             reward: RewardConfig::default(),
         }
     }
@@ -222,8 +227,9 @@ pub enum ObservationLayout {
     Extended,
     /// The extended layout (with the wave's phase where it has one) followed by the world's up
     /// (its z axis) in the head's frame (3: (0, 0, 1) upright, (0, 0, -1) upside down) and a height
-    /// map of the ground around the head ([`super::height_map`]): `HEIGHT_MAP_LEN` (25) heights
-    /// relative to the head's z on a 5 x 5 grid, 0.75 m apart; `2 + 2N + 6 + 3 + 25` in all. The
+    /// map of the ground around the head ([`super::height_map`]): by default 25 heights relative to
+    /// the head's z on a 5 x 5 grid, 0.75 m apart (`EnvConfig::height_map`); `2 + 2N + 6 + 3 + 25`
+    /// in all. The
     /// goal, heading, velocity and map are in the rolled head frame (`observation::rolled_frame`:
     /// the heading of the body's long axis, left mirrored upside down), which rolling over on
     /// hills does not scramble; upright and level it is the extended layout's frame.
@@ -231,12 +237,13 @@ pub enum ObservationLayout {
 }
 
 impl ObservationLayout {
-    /// Length of the observation for a snake of `joints` joints.
-    pub fn dim(self, joints: usize) -> usize {
+    /// Length of the observation for a snake of `joints` joints with a height map of `map_len`
+    /// values (the terrain layout's).
+    pub fn dim(self, joints: usize, map_len: usize) -> usize {
         match self {
             ObservationLayout::Paper => 2 + 2 * joints,
             ObservationLayout::Extended => 2 + 2 * joints + 6,
-            ObservationLayout::Terrain => 2 + 2 * joints + 6 + 3 + HEIGHT_MAP_LEN,
+            ObservationLayout::Terrain => 2 + 2 * joints + 6 + 3 + map_len,
         }
     }
 
@@ -427,7 +434,8 @@ impl EnvConfig {
     /// Length of the observation vector: the layout's, plus the wave's phase (sin, cos) when the
     /// extended layout meets a wave action mode.
     pub fn observation_dim(&self) -> usize {
-        self.observation.dim(self.joints()) + 2 * usize::from(self.observes_wave_phase())
+        self.observation.dim(self.joints(), self.height_map.len())
+            + 2 * usize::from(self.observes_wave_phase())
     }
 
     /// Whether the observation ends with the sine and cosine of the wave's phase at the head.
@@ -471,6 +479,16 @@ impl EnvConfig {
             terrain.validate()?;
         }
         self.action.validate()?;
+        self.height_map.validate()?;
+        if self.action.steer_residual
+            && !(self.action.mode == ActionMode::Gait && self.observation.is_extended())
+        {
+            return Err(invalid(format!(
+                "action.steer_residual needs action mode 'gait' and observation 'extended' or 'terrain' (baseline:steer reads the goal vector), got '{}' and '{}'",
+                self.action.mode.name(),
+                self.observation.name()
+            )));
+        }
         if !(self.action_scale.is_finite()
             && self.action_scale > 0.0
             && self.action_scale <= MAX_ACTION_SCALE)

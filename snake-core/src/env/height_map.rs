@@ -7,6 +7,9 @@
 //! cell differ from that by at most the cell's twist, millimetres on the rough task's 0.125 m grid),
 //! and points beyond the grid take its nearest edge. Obstacles are not in the map.
 
+use serde::{Deserialize, Serialize};
+
+use crate::error::{invalid, Result};
 use crate::world_file::{Ground, WorldSpec};
 
 /// Points per side of the square grid.
@@ -20,6 +23,68 @@ pub const HEIGHT_MAP_SPACING: f64 = 0.75;
 
 /// Values the map adds to the observation.
 pub const HEIGHT_MAP_LEN: usize = HEIGHT_MAP_SIDE * HEIGHT_MAP_SIDE;
+
+/// Most points per side a configured map may have (225 values).
+pub const MAX_HEIGHT_MAP_SIDE: usize = 15;
+
+/// Largest spacing a configured map may have, metres.
+pub const MAX_HEIGHT_MAP_SPACING: f64 = 2.0;
+
+/// The terrain observation's grid (`height_map` in an env configuration): `side` x `side` points
+/// `spacing` apart, centred on the head; [`HEIGHT_MAP_SIDE`] and [`HEIGHT_MAP_SPACING`] by default.
+/// A larger map sees an obstacle's extent from farther away (docs/tasks.md, "A ridge across the
+/// way"), at the cost of a longer observation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HeightMap {
+    /// Points per side, odd, so that the head is the middle one (5).
+    pub side: usize,
+    /// Distance between neighbouring points, metres (0.75).
+    pub spacing: f64,
+}
+
+impl Default for HeightMap {
+    fn default() -> Self {
+        HeightMap {
+            side: HEIGHT_MAP_SIDE,
+            spacing: HEIGHT_MAP_SPACING,
+        }
+    }
+}
+
+impl HeightMap {
+    /// Values the map adds to the observation.
+    pub fn len(&self) -> usize {
+        self.side * self.side
+    }
+
+    /// Always false: a map has at least one point (for clippy's `len` without `is_empty`).
+    pub fn is_empty(&self) -> bool {
+        self.side == 0
+    }
+
+    /// Whether this is the default map (left out of written configurations).
+    pub fn is_default(&self) -> bool {
+        *self == HeightMap::default()
+    }
+
+    /// Checks the grid; the error names the field and the allowed values.
+    pub fn validate(&self) -> Result<()> {
+        if self.side.is_multiple_of(2) || !(1..=MAX_HEIGHT_MAP_SIDE).contains(&self.side) {
+            return Err(invalid(format!(
+                "height_map.side must be odd, from 1 to {MAX_HEIGHT_MAP_SIDE}, got {}",
+                self.side
+            )));
+        }
+        let s = self.spacing;
+        if !(s.is_finite() && s > 0.0 && s <= MAX_HEIGHT_MAP_SPACING) {
+            return Err(invalid(format!(
+                "height_map.spacing must be in (0, {MAX_HEIGHT_MAP_SPACING}] metres, got {s}"
+            )));
+        }
+        Ok(())
+    }
+}
 
 /// The episode's ground, ready to be sampled at any planar point.
 #[derive(Debug, Clone, Default)]
@@ -89,23 +154,31 @@ impl GroundProbe {
         }
     }
 
-    /// Writes the map (`HEIGHT_MAP_LEN` values) for a head at `position` with planar heading `yaw`
-    /// (see [`super::observation::rolled_frame`]): point (i, j), at index
-    /// `i * HEIGHT_MAP_SIDE + j`, lies `(j - c) * HEIGHT_MAP_SPACING` along the head frame's x and
-    /// `(i - c) * HEIGHT_MAP_SPACING` along its y (c = the middle index; the head frame's -y points
-    /// ahead and +x to the left, or to the right when `mirror` is -1: the head upside down), and
-    /// holds the ground's height there minus the head's z.
-    pub fn write(&self, position: [f64; 3], yaw: f64, mirror: f64, out: &mut [f32]) {
+    /// Writes `map` (`map.len()` values) for a head at `position` with planar heading `yaw`
+    /// (see [`super::observation::rolled_frame`]): point (i, j), at index `i * side + j`, lies
+    /// `(j - c) * spacing` along the head frame's x and `(i - c) * spacing` along its y (c = the
+    /// middle index; the head frame's -y points ahead and +x to the left, or to the right when
+    /// `mirror` is -1: the head upside down), and holds the ground's height there minus the
+    /// head's z.
+    pub fn write(
+        &self,
+        map: &HeightMap,
+        position: [f64; 3],
+        yaw: f64,
+        mirror: f64,
+        out: &mut [f32],
+    ) {
         let (s, c) = yaw.sin_cos();
-        let middle = (HEIGHT_MAP_SIDE / 2) as f64;
-        for i in 0..HEIGHT_MAP_SIDE {
-            let hy = (i as f64 - middle) * HEIGHT_MAP_SPACING;
-            for j in 0..HEIGHT_MAP_SIDE {
+        let (side, spacing) = (map.side, map.spacing);
+        let middle = (side / 2) as f64;
+        for i in 0..side {
+            let hy = (i as f64 - middle) * spacing;
+            for j in 0..side {
                 // `mirror` -1 (the head upside down): the frame's +x, the map's columns, is mirrored.
-                let hx = mirror * (j as f64 - middle) * HEIGHT_MAP_SPACING;
+                let hx = mirror * (j as f64 - middle) * spacing;
                 // Head frame to world: rotation by +yaw about z.
                 let (x, y) = (position[0] + c * hx - s * hy, position[1] + s * hx + c * hy);
-                out[i * HEIGHT_MAP_SIDE + j] = (self.height(x, y) - position[2]) as f32;
+                out[i * side + j] = (self.height(x, y) - position[2]) as f32;
             }
         }
     }
@@ -179,7 +252,7 @@ mod tests {
         let base = crate::robot::Simulation::base_state(&snake).unwrap();
         let p = base.pose.position;
         let mut map = [0.0_f32; HEIGHT_MAP_LEN];
-        GroundProbe::of(&world).write([p.x, p.y, p.z], 0.0, 1.0, &mut map);
+        GroundProbe::of(&world).write(&HeightMap::default(), [p.x, p.y, p.z], 0.0, 1.0, &mut map);
         // The cube's centre stands 0.25 / cos(slope) above the ground below it.
         let expected = -0.25 / 0.2_f64.atan().cos();
         let c = HEIGHT_MAP_SIDE / 2;
@@ -205,7 +278,13 @@ mod tests {
         assert!((slope.height(7.0, 2.0) - 2.0).abs() < 1e-12);
         // Heading 90 degrees: the head frame's x is world y, its -y world x (ahead).
         let mut out = [0.0_f32; HEIGHT_MAP_LEN];
-        slope.write([1.0, 0.0, 0.25], std::f64::consts::FRAC_PI_2, 1.0, &mut out);
+        slope.write(
+            &HeightMap::default(),
+            [1.0, 0.0, 0.25],
+            std::f64::consts::FRAC_PI_2,
+            1.0,
+            &mut out,
+        );
         let c = HEIGHT_MAP_SIDE / 2;
         assert_eq!(out[c * HEIGHT_MAP_SIDE + c], -0.25);
         // One point to the left (+x of the head frame) is world y = +spacing: higher by spacing.
@@ -214,5 +293,97 @@ mod tests {
         // One point behind (+y of the head frame) is world x - spacing: the same height.
         let behind = out[(c + 1) * HEIGHT_MAP_SIDE + c] as f64;
         assert!((behind + 0.25).abs() < 1e-6, "{behind}");
+    }
+
+    #[test]
+    fn a_configured_map_samples_its_grid_in_the_head_frame() {
+        // A 9 x 9 grid 0.5 m apart on a 45-degree slope (height = world y), the head at heading
+        // 30 degrees, upright and then upside down (mirrored columns): each point against the
+        // plane's height at its offset turned into the world by hand.
+        let slope = GroundProbe::of(&WorldSpec {
+            ground: Ground::Slope(45.0),
+            ..WorldSpec::default()
+        });
+        let map = HeightMap {
+            side: 9,
+            spacing: 0.5,
+        };
+        let (yaw, head) = (30f64.to_radians(), [2.0, -1.0, 0.4]);
+        for mirror in [1.0, -1.0] {
+            let mut out = vec![0.0_f32; map.len()];
+            slope.write(&map, head, yaw, mirror, &mut out);
+            for i in 0..9 {
+                for j in 0..9 {
+                    // Column j lies (j - 4) * 0.5 along the head frame's x (mirrored upside down),
+                    // row i (i - 4) * 0.5 along its y; world y of that point is the plane's height.
+                    let (hx, hy) = (mirror * (j as f64 - 4.0) * 0.5, (i as f64 - 4.0) * 0.5);
+                    let world_y = head[1] + yaw.sin() * hx + yaw.cos() * hy;
+                    let want = world_y - head[2];
+                    let got = out[i * 9 + j] as f64;
+                    assert!(
+                        (got - want).abs() < 1e-5,
+                        "({i}, {j}) mirror {mirror}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_maps_name_the_field() {
+        for (map, field) in [
+            (
+                HeightMap {
+                    side: 4,
+                    spacing: 0.75,
+                },
+                "height_map.side",
+            ),
+            (
+                HeightMap {
+                    side: 0,
+                    spacing: 0.75,
+                },
+                "height_map.side",
+            ),
+            (
+                HeightMap {
+                    side: 17,
+                    spacing: 0.75,
+                },
+                "height_map.side",
+            ),
+            (
+                HeightMap {
+                    side: 5,
+                    spacing: 0.0,
+                },
+                "height_map.spacing",
+            ),
+            (
+                HeightMap {
+                    side: 5,
+                    spacing: f64::NAN,
+                },
+                "height_map.spacing",
+            ),
+            (
+                HeightMap {
+                    side: 5,
+                    spacing: 2.5,
+                },
+                "height_map.spacing",
+            ),
+        ] {
+            let m = map.validate().unwrap_err().to_string();
+            assert!(m.contains(field), "{m}");
+        }
+        assert!(HeightMap::default().validate().is_ok());
+        assert!(HeightMap {
+            side: 15,
+            spacing: 2.0
+        }
+        .validate()
+        .is_ok());
     }
 }

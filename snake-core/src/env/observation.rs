@@ -1,7 +1,7 @@
 //! Writing the observation vector.
 
 use super::config::ObservationLayout;
-use super::height_map::{GroundProbe, HEIGHT_MAP_LEN};
+use super::height_map::{GroundProbe, HeightMap};
 use crate::error::Result;
 use crate::robot::Simulation;
 pub(crate) use crate::world::BaseState;
@@ -50,7 +50,7 @@ impl JointScratch {
 }
 
 /// Fills `obs` (of the layout's length, plus 2 with a wave phase) from the snake's current state and,
-/// for the terrain layout, from `ground`; returns the base state.
+/// for the terrain layout, from `ground` sampled at the grid `map`; returns the base state.
 ///
 /// Every value is the simulator's double cast to `float32` (round to nearest), as the paper's
 /// `np.array(...).astype(np.float32)` does.
@@ -59,7 +59,7 @@ pub(crate) fn write(
     snake: &dyn Simulation,
     goal: (f64, f64),
     wave_phase: Option<f64>,
-    ground: &GroundProbe,
+    (ground, map): (&GroundProbe, &HeightMap),
     scratch: &mut JointScratch,
     obs: &mut [f32],
 ) -> Result<BaseState> {
@@ -98,7 +98,7 @@ pub(crate) fn write(
             // After the wave's phase where there is one: the world's up in the head's own frame
             // (not mirrored), then the map. The cube snake's joints all turn about its z axis, so the
             // head's up is the whole body's: on hills it rolls over.
-            let at = obs.len() - HEIGHT_MAP_LEN;
+            let at = obs.len() - map.len();
             let up = base
                 .pose
                 .orientation
@@ -106,7 +106,7 @@ pub(crate) fn write(
             for (o, u) in obs[at - 3..at].iter_mut().zip(up.iter()) {
                 *o = *u as f32;
             }
-            ground.write([p.x, p.y, p.z], yaw, mirror, &mut obs[at..]);
+            ground.write(map, [p.x, p.y, p.z], yaw, mirror, &mut obs[at..]);
         }
     }
     Ok(base)

@@ -135,6 +135,28 @@ fn bad_configs_name_the_field() {
             },
             "reward.energy_weight",
         ),
+        (
+            EnvConfig {
+                action: ActionConfig {
+                    steer_residual: true,
+                    ..ActionConfig::default()
+                },
+                ..EnvConfig::goal_task(Preset::Paper, 5)
+            },
+            "action.steer_residual",
+        ),
+        (
+            EnvConfig {
+                observation: ObservationLayout::Paper,
+                action: ActionConfig {
+                    mode: ActionMode::Gait,
+                    steer_residual: true,
+                    ..ActionConfig::default()
+                },
+                ..EnvConfig::default()
+            },
+            "action.steer_residual",
+        ),
     ];
     for (config, field) in cases {
         let m = invalid_message(SnakeEnv::new(config));
@@ -899,4 +921,129 @@ fn progress_around_ridges_measures_the_way_around_them() {
     }
     assert!((progress - (around(origin) - around(e.position))).abs() < 1e-9);
     assert!((progress - (straight(origin) - straight(e.position))).abs() > 0.5);
+}
+
+#[test]
+fn zero_steer_residuals_drive_baseline_steer() {
+    // baseline:steer as snakesim.agents.baselines writes it: the goal's bearing in the head frame
+    // (its -y ahead, +x to the left) from the observation's goal vector, steering clip(-bearing).
+    fn steer(obs: &[f32], joints: usize) -> f32 {
+        let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
+        (-gx.atan2(-gy)).clamp(-1.0, 1.0)
+    }
+    for observation in [ObservationLayout::Extended, ObservationLayout::Terrain] {
+        let plain = EnvConfig {
+            observation,
+            ..EnvConfig::goal_task(Preset::Paper, 5)
+        };
+        let mut residual = plain.clone();
+        residual.action.steer_residual = true;
+        let (mut a, mut b) = (env(plain), env(residual));
+        let (mut obs_a, _) = a.reset(Some(7), ResetOptions::default()).unwrap();
+        let (mut obs_b, _) = b.reset(Some(7), ResetOptions::default()).unwrap();
+        let mut steered = 0;
+        for _ in 0..400 {
+            assert_eq!(obs_a, obs_b);
+            let s = steer(&obs_a, 5);
+            steered += usize::from(s.abs() > 0.05);
+            let ra = a.step(&[s, 0.0, 0.0]).unwrap();
+            let rb = b.step(&[0.0f32, 0.0, 0.0]).unwrap();
+            assert_eq!(ra.reward.to_bits(), rb.reward.to_bits());
+            if ra.terminated || ra.truncated {
+                break;
+            }
+            (obs_a, obs_b) = (ra.obs, rb.obs);
+        }
+        assert!(steered > 10, "the goal was never off to a side");
+    }
+}
+
+#[test]
+fn a_steer_residual_reaches_any_steering_whatever_steer_asks() {
+    let config = EnvConfig {
+        observation: ObservationLayout::Extended,
+        goal: (0.0, 0.0),
+        goal_distribution: None,
+        max_episode_steps: 10_000,
+        ..EnvConfig::goal_task(Preset::Paper, 5)
+    };
+    let mut residual = config.clone();
+    residual.action.steer_residual = true;
+    // The goal far to the left of the head (steer saturates at -1) and far to its right (+1).
+    for goal in [(500.0, 0.0), (-500.0, 0.0)] {
+        let start = StartPose {
+            x: 0.0,
+            y: 0.0,
+            z: 0.5,
+            yaw: 0.0,
+        };
+        let options = ResetOptions {
+            start: Some(start),
+            goal: Some(goal),
+        };
+        // With a correction of -1 or +1 on top, the steering is -1 or +1 whatever steer asks,
+        // so the residual env follows the plain one driven by that steering.
+        for (correction, steering) in [(-1.0f32, -1.0f32), (1.0, 1.0)] {
+            let (mut a, mut b) = (env(config.clone()), env(residual.clone()));
+            let (oa, _) = a.reset(Some(1), options).unwrap();
+            let (ob, _) = b.reset(Some(1), options).unwrap();
+            assert_eq!(oa, ob);
+            for _ in 0..60 {
+                let ra = a.step(&[steering, 0.0, 0.0]).unwrap();
+                let rb = b.step(&[correction, 0.0, 0.0]).unwrap();
+                assert_eq!(ra.obs, rb.obs, "goal {goal:?}, correction {correction}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_larger_height_map_holds_the_default_one_in_its_middle() {
+    // The rough task's hills, the terrain observation with the default 5 x 5 map and with a 9 x 9
+    // one at the same spacing: the same episode, the same values before the map, and the inner
+    // 5 x 5 points of the larger map are the default map's.
+    let base = EnvConfig {
+        observation: ObservationLayout::Terrain,
+        ..EnvConfig::rough_task(Preset::Paper, 10)
+    };
+    let large = EnvConfig {
+        height_map: HeightMap {
+            side: 9,
+            spacing: HEIGHT_MAP_SPACING,
+        },
+        ..base.clone()
+    };
+    let (mut a, mut b) = (env(base), env(large));
+    assert_eq!(
+        b.observation_dim(),
+        a.observation_dim() - HEIGHT_MAP_LEN + 81
+    );
+    let (mut oa, _) = a.reset(Some(3), ResetOptions::default()).unwrap();
+    let (mut ob, _) = b.reset(Some(3), ResetOptions::default()).unwrap();
+    for step in 0..40 {
+        let head = oa.len() - HEIGHT_MAP_LEN;
+        assert_eq!(oa[..head], ob[..head], "step {step}");
+        let (small, big) = (&oa[head..], &ob[head..]);
+        for i in 0..HEIGHT_MAP_SIDE {
+            for j in 0..HEIGHT_MAP_SIDE {
+                assert_eq!(small[i * HEIGHT_MAP_SIDE + j], big[(i + 2) * 9 + j + 2]);
+            }
+        }
+        assert!(
+            big.iter().any(|h| (h - big[40]).abs() > 0.05),
+            "hills in view"
+        );
+        oa = a.step(&[0.3f32, 0.0, 0.0]).unwrap().obs;
+        ob = b.step(&[0.3f32, 0.0, 0.0]).unwrap().obs;
+    }
+    let bad = EnvConfig {
+        observation: ObservationLayout::Terrain,
+        height_map: HeightMap {
+            side: 6,
+            spacing: 0.5,
+        },
+        ..EnvConfig::rough_task(Preset::Paper, 10)
+    };
+    let m = invalid_message(SnakeEnv::new(bad));
+    assert!(m.starts_with("height_map.side must be odd"), "{m}");
 }

@@ -25,7 +25,7 @@ PEGS_ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("pegs"
 #: The same for the rough-ground task (SnakeRoughEnv, ``snakesim/SnakeRough-v0``).
 ROUGH_ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("rough"))
 #: Keywords holding a mapping of overrides; None means the task's defaults.
-TABLE_KEYWORDS = ("start", "reward", "snake", "action", "terrain")
+TABLE_KEYWORDS = ("start", "reward", "snake", "action", "terrain", "height_map")
 #: Every keyword an env accepts: ``task`` ("paper" or "goal") picks the defaults the others override.
 ENV_KEYWORDS = ("task", *ENV_DEFAULTS, *(k for k in TABLE_KEYWORDS if k not in ENV_DEFAULTS))
 PRESETS: tuple[str, ...] = tuple(_core.PRESETS)

@@ -35,7 +35,11 @@ class SnakeEnv(gymnasium.Env):
     ``action["steering"]`` ([-0.5, 0.5] rad), ``action["amplitude"]`` ([0.2, 0.6] rad) and
     ``action["frequency"]`` ([0.4, 1.0] Hz), the wave's phase carried across steps; ``"residual"``,
     ``Box(-1, 1, (N,))``, pybullet snake.py's wave (0.4 rad, 1.5 s) plus ``action * residual_scale``
-    (0.3 rad) per joint.
+    (0.3 rad) per joint. In the gait mode, ``action["steer_residual"]`` (False) makes the steering
+    action a correction to ``baseline:steer``'s: the steering is ``clip(steer + 2 * action[0], -1,
+    1)`` with ``steer = clip(-bearing, -1, 1)``, the goal's bearing read from the observation the
+    action answers (the extended or terrain one), so that zero actions drive ``baseline:steer``
+    (residual policy learning).
 
     **Observation space**: ``Box(-inf, inf, (2 + 2N,), float32)`` with ``observation="paper"``: base
     (head) x, base y, then for each joint its (angle, velocity) pair, interleaved. With
@@ -46,9 +50,11 @@ class SnakeEnv(gymnasium.Env):
     the ground around the head (25 values, last): the ground's height minus the head's z at a 5 x 5
     grid of points 0.75 m apart, centred on the head and turned with its heading: five rows from
     1.5 m ahead to 1.5 m behind, each from 1.5 m to the right to 1.5 m to the left (docs/tasks.md,
-    "The terrain observation"). Its goal vector, heading, velocity and map are in the rolled head
-    frame: the heading of the body's long axis, with left mirrored while the head is upside down,
-    so that rolling over on hills does not scramble them (upright and level, the extended frame).
+    "The terrain observation"); ``height_map={"side": 9, "spacing": 0.75}`` makes it a 9 x 9
+    grid (81 values; ``side`` odd, at most 15, ``spacing`` in (0, 2] m) that sees 3 m around. Its
+    goal vector, heading, velocity and map are in the rolled head frame: the heading of the body's
+    long axis, with left mirrored while the head is upside down, so that rolling over on hills
+    does not scramble them (upright and level, the extended frame).
 
     **Reward**: minus the planar head-goal distance (times ``reward["distance_weight"]``, 1); 100
     instead once the head is within ``goal_radius`` of the goal. Optional terms (``reward={...}``, off
@@ -117,6 +123,7 @@ class SnakeEnv(gymnasium.Env):
         robot: str | os.PathLike[str] | None = _D["robot"],
         world: str | os.PathLike[str] | None = _D["world"],
         terrain: Mapping[str, Any] | None = _D["terrain"],
+        height_map: Mapping[str, Any] | None = _D["height_map"],
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -139,6 +146,7 @@ class SnakeEnv(gymnasium.Env):
             robot=None if robot is None else os.fspath(robot),
             world=None if world is None else os.fspath(world),
             terrain=terrain,
+            height_map=height_map,
         )
         self._config_json = env_config(task=self.task, **self._kwargs)
         self._env = _core.Env(self._config_json)
@@ -290,6 +298,7 @@ class SnakeGoalEnv(SnakeEnv):
         robot: str | os.PathLike[str] | None = _G["robot"],
         world: str | os.PathLike[str] | None = _G["world"],
         terrain: Mapping[str, Any] | None = _G["terrain"],
+        height_map: Mapping[str, Any] | None = _G["height_map"],
         render_mode: str | None = None,
     ) -> None:
         super().__init__(
@@ -309,6 +318,7 @@ class SnakeGoalEnv(SnakeEnv):
             robot=robot,
             world=world,
             terrain=terrain,
+            height_map=height_map,
             render_mode=render_mode,
         )
 
