@@ -8,7 +8,8 @@ measures whether seeing the ridge is enough, without learning, to go around it (
 ridge across the way"). Its memory belongs to an env slot of the batch, not to an episode: an episode
 that starts while the slot's previous episode was holding straight holds on for the rest of HOLD.
 Usage: ridge_steer.py [EPISODES] [SEED] [RISE] [HOLD] [CONFIG] (CONFIG: a run configuration whose env
-to run, rough-10-ridge.yaml's by default)."""
+to run, rough-10-ridge.yaml's by default; its height map, whatever its size, is the one the rule reads:
+ahead is the rows in front of the head's, the sides the columns beside its own)."""
 
 from __future__ import annotations
 
@@ -71,6 +72,10 @@ def main() -> None:
     run = runconfig.load(Path(args[4]) if len(args) > 4 else CONFIG)
     joints = run["joints"]
     kwargs = {**run["env"], "joints": joints}
+    # The rule sets the steering itself: where the config's agent corrects steer's
+    # (action.steer_residual), the rule drives the plain gait on the same episodes.
+    action = {k: v for k, v in (kwargs.get("action") or {}).items() if k != "steer_residual"}
+    kwargs["action"] = action or None
     summary = summarize(run_episodes(ridge_steer(joints, rise, hold), kwargs, episodes, seed))
     low, high = summary["success_rate_ci95"]
     rate = summary["success_rate"]
