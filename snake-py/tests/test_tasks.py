@@ -414,3 +414,5 @@ def test_a_larger_height_map_sees_farther_and_bad_maps_are_one_line():
         with pytest.raises(kind, match=message) as error:
             snakesim.SnakeRoughEnv(observation="terrain", height_map=height_map)
         assert "\n" not in str(error.value)
+    with pytest.raises(ValueError, match="height_map: needs observation 'terrain'"):
+        snakesim.SnakeRoughEnv(height_map={"side": 9})

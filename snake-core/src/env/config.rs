@@ -229,10 +229,10 @@ pub enum ObservationLayout {
     /// (its z axis) in the head's frame (3: (0, 0, 1) upright, (0, 0, -1) upside down) and a height
     /// map of the ground around the head ([`super::height_map`]): by default 25 heights relative to
     /// the head's z on a 5 x 5 grid, 0.75 m apart (`EnvConfig::height_map`); `2 + 2N + 6 + 3 + 25`
-    /// in all. The
-    /// goal, heading, velocity and map are in the rolled head frame (`observation::rolled_frame`:
-    /// the heading of the body's long axis, left mirrored upside down), which rolling over on
-    /// hills does not scramble; upright and level it is the extended layout's frame.
+    /// in all. The goal, heading, velocity and map are in the rolled head frame
+    /// (`observation::rolled_frame`: the heading of the body's long axis, left mirrored upside
+    /// down), which rolling over on hills does not scramble; upright and level it is the extended
+    /// layout's frame.
     Terrain,
 }
 
@@ -480,6 +480,12 @@ impl EnvConfig {
         }
         self.action.validate()?;
         self.height_map.validate()?;
+        if !self.height_map.is_default() && self.observation != ObservationLayout::Terrain {
+            return Err(invalid(format!(
+                "height_map needs observation 'terrain' (the map is its last values), got '{}'",
+                self.observation.name()
+            )));
+        }
         if self.action.steer_residual
             && !(self.action.mode == ActionMode::Gait && self.observation.is_extended())
         {

@@ -157,6 +157,16 @@ fn bad_configs_name_the_field() {
             },
             "action.steer_residual",
         ),
+        (
+            EnvConfig {
+                height_map: HeightMap {
+                    side: 9,
+                    spacing: 0.75,
+                },
+                ..EnvConfig::goal_task(Preset::Paper, 5)
+            },
+            "height_map",
+        ),
     ];
     for (config, field) in cases {
         let m = invalid_message(SnakeEnv::new(config));
