@@ -58,7 +58,7 @@ impl HeightMap {
         self.side * self.side
     }
 
-    /// Always false: a map has at least one point (for clippy's `len` without `is_empty`).
+    /// Whether the map has no points (never once validated; `len`'s companion).
     pub fn is_empty(&self) -> bool {
         self.side == 0
     }
