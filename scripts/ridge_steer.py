@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from snakesim.agents.baselines import goal_bearing
+from snakesim.agents.baselines import goal_bearing, plain_gait
 from snakesim.agents.evaluation import run_episodes, summarize
 from snakesim.runs import config as runconfig
 
@@ -71,11 +71,7 @@ def main() -> None:
     hold = float(args[3]) if len(args) > 3 else 5.0
     run = runconfig.load(Path(args[4]) if len(args) > 4 else CONFIG)
     joints = run["joints"]
-    kwargs = {**run["env"], "joints": joints}
-    # The rule sets the steering itself: where the config's agent corrects steer's
-    # (action.steer_residual), the rule drives the plain gait on the same episodes.
-    action = {k: v for k, v in (kwargs.get("action") or {}).items() if k != "steer_residual"}
-    kwargs["action"] = action or None
+    kwargs = plain_gait({**run["env"], "joints": joints})
     summary = summarize(run_episodes(ridge_steer(joints, rise, hold), kwargs, episodes, seed))
     low, high = summary["success_rate_ci95"]
     rate = summary["success_rate"]

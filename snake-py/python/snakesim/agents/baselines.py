@@ -12,6 +12,7 @@ trained agent must beat. ``snakesim evaluate baseline:steer --joints 10`` evalua
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -45,6 +46,17 @@ class Controller:
         return actions
 
 
+def plain_gait(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """``env_kwargs`` for a hand-made controller: where an agent's steering corrects steer's
+    (``action.steer_residual``), the controller sets the steering itself, so it drives the plain gait
+    in the same episodes (the layouts and goals come from the seeds, not the actions)."""
+    kwargs = dict(env_kwargs)
+    action = kwargs.get("action")
+    if isinstance(action, Mapping) and action.get("steer_residual"):
+        kwargs["action"] = {k: v for k, v in action.items() if k != "steer_residual"}
+    return kwargs
+
+
 def check_env(config: dict[str, Any]) -> None:
     """Raises ValueError unless the resolved env ``config`` has what the baselines need."""
     if config["action"]["mode"] != "gait" or config["observation"] not in ("extended", "terrain"):
@@ -54,4 +66,4 @@ def check_env(config: dict[str, Any]) -> None:
         )
 
 
-__all__ = ["NAMES", "Controller", "check_env", "goal_bearing"]
+__all__ = ["NAMES", "Controller", "check_env", "goal_bearing", "plain_gait"]

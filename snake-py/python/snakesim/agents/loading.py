@@ -384,12 +384,9 @@ def _load_baseline(
     if env_from is not None:
         if joints is not None or preset is not None:
             raise AgentError(f"--env-from takes joints and preset from {os.fspath(env_from)}: leave them out")
-        env_kwargs: dict[str, Any] = {**env_kwargs_of(env_from), **(env_overrides or {})}
-        action = env_kwargs.get("action")
-        if isinstance(action, Mapping) and action.get("steer_residual"):
-            # A residual agent's steering corrects steer's; the baseline drives the plain gait, in
-            # the same episodes (the layouts and goals come from the seeds, not the actions).
-            env_kwargs["action"] = {k: v for k, v in action.items() if k != "steer_residual"}
+        env_kwargs: dict[str, Any] = baselines.plain_gait(
+            {**env_kwargs_of(env_from), **(env_overrides or {})}
+        )
     else:
         env_kwargs = {
             "task": task,
