@@ -181,7 +181,7 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
                     c.action_scale
                 ),
                 snake_core::env::ActionMode::Gait => format!(
-                    "gait: steering {:?} rad, amplitude {:?} rad, frequency {:?} Hz, each from [-1, 1]{}",
+                    "gait: steering {:?} rad, amplitude {:?} rad, frequency {:?} Hz, each from [-1, 1]{}{}",
                     c.action.steering,
                     c.action.amplitude,
                     c.action.frequency,
@@ -189,6 +189,14 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
                         format!(
                             "; the steering corrects baseline:steer's: clip(steer + {} x action, -1, 1)",
                             snake_core::env::STEER_RESIDUAL_GAIN
+                        )
+                    } else {
+                        String::new()
+                    },
+                    if c.action.steer_near_goal > 0.0 {
+                        format!(
+                            "; within {} m of the goal baseline:steer drives, whatever the action",
+                            c.action.steer_near_goal
                         )
                     } else {
                         String::new()

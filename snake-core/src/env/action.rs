@@ -20,6 +20,9 @@ pub const MAX_RESIDUAL_SCALE: f64 = 1.5;
 /// `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`: 2, so that whatever `baseline:steer` asks
 /// (at most 1 either way), the action can still reach any steering.
 pub const STEER_RESIDUAL_GAIN: f64 = 2.0;
+/// Largest [`ActionConfig::steer_near_goal`], metres: a hand-over from further away than the
+/// longest goal distance any task draws by default would leave the policy nothing to do.
+pub const MAX_STEER_NEAR_GOAL: f64 = 10.0;
 
 /// What an action sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -82,6 +85,20 @@ pub struct ActionConfig {
     /// (`extended` or `terrain`). Left out of written configurations while false.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub steer_residual: bool,
+    /// Gait mode, metres (0: off): within this distance of the goal (the observation's goal
+    /// vector) `baseline:steer` drives, whatever the action: the steering is `clip(-bearing, -1,
+    /// 1)` as with `steer_residual`, and amplitude and frequency are the middle of their ranges
+    /// (actions of 0), as `baseline:steer` sets them. A hand-over: the policy finds the way, the
+    /// hand controller makes the last approach. Needs an observation with the goal vector
+    /// (`extended` or `terrain`); at most [`MAX_STEER_NEAR_GOAL`]. Left out of written
+    /// configurations while 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub steer_near_goal: f64,
+}
+
+/// serde's `skip_serializing_if` for a distance that is off at 0.
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl Default for ActionConfig {
@@ -93,6 +110,7 @@ impl Default for ActionConfig {
             frequency: [0.4, 1.0],
             residual_scale: 0.3,
             steer_residual: false,
+            steer_near_goal: 0.0,
         }
     }
 }
@@ -132,6 +150,12 @@ impl ActionConfig {
                 self.frequency[0], self.frequency[1]
             )));
         }
+        let near = self.steer_near_goal;
+        if !(near.is_finite() && (0.0..=MAX_STEER_NEAR_GOAL).contains(&near)) {
+            return Err(invalid(format!(
+                "action.steer_near_goal must be in [0, {MAX_STEER_NEAR_GOAL}] m, got {near}"
+            )));
+        }
         let r = self.residual_scale;
         if !(r.is_finite() && (0.0..=MAX_RESIDUAL_SCALE).contains(&r)) {
             return Err(invalid(format!(
@@ -147,8 +171,13 @@ impl ActionConfig {
 /// (its -y ahead, +x to the left), in `float32` as the Python baseline computes it from the same
 /// values (`snakesim.agents.baselines`), so that a zero correction drives it step for step.
 pub(crate) fn goal_steering(obs: &[f32], joints: usize) -> f64 {
-    let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
+    let (gx, gy) = goal_vector(obs, joints);
     f64::from((-gx.atan2(-gy)).clamp(-1.0, 1.0))
+}
+
+/// The goal vector (gx, gy) of an extended or terrain observation, metres in the head frame.
+fn goal_vector(obs: &[f32], joints: usize) -> (f32, f32) {
+    (obs[2 + 2 * joints], obs[3 + 2 * joints])
 }
 
 /// `low + (high - low) * (a + 1) / 2` for `a` in [-1, 1].
@@ -202,8 +231,11 @@ pub(crate) struct Driver {
     wave: Wave,
     /// The clipped action of the current env step.
     action: Vec<f64>,
-    /// With `steer_residual`: `baseline:steer`'s steering for the last observation.
+    /// With `steer_residual` or `steer_near_goal`: `baseline:steer`'s steering for the last
+    /// observation.
     goal_steering: f64,
+    /// With `steer_near_goal`: whether the last observation's goal lies within it.
+    near_goal: bool,
 }
 
 impl Driver {
@@ -234,6 +266,7 @@ impl Driver {
             // Sized once: stepping stays allocation-free.
             action: Vec::with_capacity(config.action_dim()),
             goal_steering: 0.0,
+            near_goal: false,
         }
     }
 
@@ -243,11 +276,17 @@ impl Driver {
         self.action.clear();
     }
 
-    /// With `steer_residual`, what `baseline:steer` would steer for the observation just written
-    /// (`obs`, of an extended or terrain layout of a body of `joints` joints); a no-op otherwise.
+    /// With `steer_residual` or `steer_near_goal`, what `baseline:steer` would steer for the
+    /// observation just written (`obs`, of an extended or terrain layout of a body of `joints`
+    /// joints) and whether its goal is near; a no-op otherwise.
     pub fn observe(&mut self, obs: &[f32], joints: usize) {
-        if self.config.steer_residual {
+        let near = self.config.steer_near_goal;
+        if self.config.steer_residual || near > 0.0 {
             self.goal_steering = goal_steering(obs, joints);
+        }
+        if near > 0.0 {
+            let (gx, gy) = goal_vector(obs, joints);
+            self.near_goal = f64::from(gx).hypot(f64::from(gy)) < near;
         }
     }
 
@@ -257,14 +296,21 @@ impl Driver {
         self.action.extend(action.map(|a| a.clamp(-1.0, 1.0)));
         if self.config.mode == ActionMode::Gait {
             let c = &self.config;
-            let steering_action = if c.steer_residual {
-                (self.goal_steering + STEER_RESIDUAL_GAIN * self.action[0]).clamp(-1.0, 1.0)
+            let [steering_action, amplitude_action, frequency_action] = if self.near_goal {
+                // The hand-over: baseline:steer's action.
+                [self.goal_steering, 0.0, 0.0]
+            } else if c.steer_residual {
+                [
+                    (self.goal_steering + STEER_RESIDUAL_GAIN * self.action[0]).clamp(-1.0, 1.0),
+                    self.action[1],
+                    self.action[2],
+                ]
             } else {
-                self.action[0]
+                [self.action[0], self.action[1], self.action[2]]
             };
             let steering = lerp(c.steering, steering_action);
-            let amplitude = lerp(c.amplitude, self.action[1]);
-            let frequency = lerp(c.frequency, self.action[2]);
+            let amplitude = lerp(c.amplitude, amplitude_action);
+            let frequency = lerp(c.frequency, frequency_action);
             match &mut self.wave {
                 Wave::Sine(w) => {
                     w.steering = steering;

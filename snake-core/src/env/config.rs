@@ -486,14 +486,18 @@ impl EnvConfig {
                 self.observation.name()
             )));
         }
-        if self.action.steer_residual
-            && !(self.action.mode == ActionMode::Gait && self.observation.is_extended())
-        {
-            return Err(invalid(format!(
-                "action.steer_residual needs action mode 'gait' and observation 'extended' or 'terrain' (baseline:steer reads the goal vector), got '{}' and '{}'",
-                self.action.mode.name(),
-                self.observation.name()
-            )));
+        let steered_by = [
+            ("steer_residual", self.action.steer_residual),
+            ("steer_near_goal", self.action.steer_near_goal > 0.0),
+        ];
+        for (key, on) in steered_by {
+            if on && !(self.action.mode == ActionMode::Gait && self.observation.is_extended()) {
+                return Err(invalid(format!(
+                    "action.{key} needs action mode 'gait' and observation 'extended' or 'terrain' (baseline:steer reads the goal vector), got '{}' and '{}'",
+                    self.action.mode.name(),
+                    self.observation.name()
+                )));
+            }
         }
         if !(self.action_scale.is_finite()
             && self.action_scale > 0.0

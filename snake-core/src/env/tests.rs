@@ -159,6 +159,40 @@ fn bad_configs_name_the_field() {
         ),
         (
             EnvConfig {
+                action: ActionConfig {
+                    steer_near_goal: 2.0,
+                    ..ActionConfig::default()
+                },
+                ..EnvConfig::goal_task(Preset::Paper, 5)
+            },
+            "action.steer_near_goal",
+        ),
+        (
+            EnvConfig {
+                action: ActionConfig {
+                    mode: ActionMode::Gait,
+                    steer_near_goal: f64::NAN,
+                    ..ActionConfig::default()
+                },
+                observation: ObservationLayout::Extended,
+                ..EnvConfig::goal_task(Preset::Paper, 5)
+            },
+            "action.steer_near_goal",
+        ),
+        (
+            EnvConfig {
+                action: ActionConfig {
+                    mode: ActionMode::Gait,
+                    steer_near_goal: -1.0,
+                    ..ActionConfig::default()
+                },
+                observation: ObservationLayout::Extended,
+                ..EnvConfig::goal_task(Preset::Paper, 5)
+            },
+            "action.steer_near_goal",
+        ),
+        (
+            EnvConfig {
                 height_map: HeightMap {
                     side: 9,
                     spacing: 0.75,
@@ -965,6 +999,81 @@ fn zero_steer_residuals_drive_baseline_steer() {
             (obs_a, obs_b) = (ra.obs, rb.obs);
         }
         assert!(steered > 10, "the goal was never off to a side");
+    }
+}
+
+#[test]
+fn near_the_goal_baseline_steer_drives_whatever_the_action() {
+    use rand::{Rng, SeedableRng};
+    // baseline:steer as snakesim.agents.baselines writes it (see the test above), and the goal's
+    // distance from the same goal vector.
+    fn steer(obs: &[f32], joints: usize) -> f32 {
+        let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
+        (-gx.atan2(-gy)).clamp(-1.0, 1.0)
+    }
+    fn distance(obs: &[f32], joints: usize) -> f64 {
+        f64::from(obs[2 + 2 * joints]).hypot(f64::from(obs[3 + 2 * joints]))
+    }
+    const NEAR: f64 = 2.5;
+    for (observation, residual) in [
+        (ObservationLayout::Extended, false),
+        (ObservationLayout::Terrain, false),
+        (ObservationLayout::Terrain, true),
+    ] {
+        let plain = EnvConfig {
+            observation,
+            ..EnvConfig::goal_task(Preset::Paper, 5)
+        };
+        let mut handed = plain.clone();
+        handed.action.steer_near_goal = NEAR;
+        handed.action.steer_residual = residual;
+        let (mut a, mut b) = (env(plain), env(handed));
+        // Arbitrary actions far from the goal, the same in both envs; the plain env is given
+        // steer's action wherever the goal is within NEAR, the handed-over one never is.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let (mut near, mut far) = (0, 0);
+        for episode in 0..3 {
+            let (mut obs_a, _) = a
+                .reset(Some(11 + episode), ResetOptions::default())
+                .unwrap();
+            let (obs_b, _) = b
+                .reset(Some(11 + episode), ResetOptions::default())
+                .unwrap();
+            assert_eq!(obs_a, obs_b);
+            for _ in 0..600 {
+                let mut action: [f32; 3] = std::array::from_fn(|_| rng.gen_range(-1.0..=1.0));
+                let s = steer(&obs_a, 5);
+                action[0] = if residual {
+                    // No steering correction: the residual env then steers as steer does, bit
+                    // for bit (the test above); amplitude and frequency still vary.
+                    0.0
+                } else {
+                    // Roughly towards the goal, so that episodes get near it.
+                    (s + 0.5 * action[0]).clamp(-1.0, 1.0)
+                };
+                let plain_action = if distance(&obs_a, 5) < NEAR {
+                    near += 1;
+                    [s, 0.0, 0.0]
+                } else {
+                    far += 1;
+                    if residual {
+                        [s, action[1], action[2]]
+                    } else {
+                        action
+                    }
+                };
+                let ra = a.step(&plain_action).unwrap();
+                let rb = b.step(&action).unwrap();
+                assert_eq!(ra.obs, rb.obs, "{observation:?}, residual {residual}");
+                assert_eq!(ra.reward.to_bits(), rb.reward.to_bits());
+                assert_eq!(ra.terminated, rb.terminated);
+                if ra.terminated || ra.truncated {
+                    break;
+                }
+                obs_a = ra.obs;
+            }
+        }
+        assert!(near > 20 && far > 20, "near {near}, far {far}");
     }
 }
 

@@ -46,14 +46,20 @@ class Controller:
         return actions
 
 
+# The action keys that put baseline:steer into an agent's env; a hand-made controller drives
+# without them.
+_STEER_KEYS = ("steer_residual", "steer_near_goal")
+
+
 def plain_gait(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
     """``env_kwargs`` for a hand-made controller: where an agent's steering corrects steer's
-    (``action.steer_residual``), the controller sets the steering itself, so it drives the plain gait
-    in the same episodes (the layouts and goals come from the seeds, not the actions)."""
+    (``action.steer_residual``) or steer takes over near the goal (``action.steer_near_goal``), the
+    controller sets the steering itself, so it drives the plain gait in the same episodes (the
+    layouts and goals come from the seeds, not the actions)."""
     kwargs = dict(env_kwargs)
     action = kwargs.get("action")
-    if isinstance(action, Mapping) and action.get("steer_residual"):
-        kwargs["action"] = {k: v for k, v in action.items() if k != "steer_residual"}
+    if isinstance(action, Mapping) and any(action.get(k) for k in _STEER_KEYS):
+        kwargs["action"] = {k: v for k, v in action.items() if k not in _STEER_KEYS}
     return kwargs
 
 

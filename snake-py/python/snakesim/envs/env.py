@@ -39,7 +39,10 @@ class SnakeEnv(gymnasium.Env):
     action a correction to ``baseline:steer``'s: the steering is ``clip(steer + 2 * action[0], -1,
     1)`` with ``steer = clip(-bearing, -1, 1)``, the goal's bearing read from the observation the
     action answers (the extended or terrain one), so that zero actions drive ``baseline:steer``
-    (residual policy learning).
+    (residual policy learning). ``action["steer_near_goal"]`` (0 m: off; at most 10) hands the
+    last approach to ``baseline:steer``: while the observation's goal vector is shorter than it,
+    the steering is steer's and amplitude and frequency the middle of their ranges, whatever the
+    action.
 
     **Observation space**: ``Box(-inf, inf, (2 + 2N,), float32)`` with ``observation="paper"``: base
     (head) x, base y, then for each joint its (angle, velocity) pair, interleaved. With
