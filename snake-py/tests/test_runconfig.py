@@ -58,6 +58,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "rough-10-crater-end",
         "rough-10-crater-route",
         "rough-10-crater",
+        "rough-10-hills",
         "rough-10-ridge-residual",
         "rough-10-ridge",
         "rough-10",

@@ -4,6 +4,8 @@ docstring defaults, one layout per seed, robots in the tasks, baselines on them,
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import json
 from pathlib import Path
 
@@ -190,9 +192,16 @@ def test_a_model_runs_in_the_env_it_was_trained_in_after_a_default_changes(tmp_p
         load_agent(str(model))
 
 
+# The first 16 of the 100 episodes of the model cards' tables: `evaluate --seed 900000` seeds its 16
+# envs 900000-900015, and each env's first episode is one of the card's.
+CARD_SEED, CARD_EPISODES = 900000, 16
+
+
 def _success(*args: str, tmp_path: Path) -> list[bool]:
     out = tmp_path / "e.json"
-    cli_main(["evaluate", *args, "--episodes", "4", "--seed", "777000", "--json", str(out)])
+    cli_main(
+        ["evaluate", *args, "--episodes", str(CARD_EPISODES), "--seed", str(CARD_SEED), "--json", str(out)]
+    )
     return [e["success"] for e in json.loads(out.read_text())["per_episode"]]
 
 
@@ -208,14 +217,15 @@ def test_a_task_agent_reaches_goals_where_steer_fails(model, tmp_path):
     path = str(ROOT / "models" / model)
     agent = _success(path, tmp_path=tmp_path)
     steer = _success("baseline:steer", "--env-from", path, tmp_path=tmp_path)
-    # On the same 4 episodes the agent reaches every goal and beats steer by at least 2 of 4 (its
-    # 100-episode margin is over 0.3 on each task).
-    assert all(agent), agent
-    assert sum(agent) - sum(steer) >= 2, (agent, steer)
+    # The issue's targets on these 16 of the card's episodes: success at least 0.90 and at least
+    # 0.30 above steer's on the same episodes.
+    assert len(agent) == len(steer) == CARD_EPISODES
+    assert np.mean(agent) >= 0.90, agent
+    assert np.mean(agent) - np.mean(steer) >= 0.30, (agent, steer)
 
 
-def test_the_pegs_agent_is_shipped():
-    assert "pegs-10.safetensors" in TASK_AGENTS
+def test_the_pegs_and_rough_agents_are_shipped():
+    assert {"pegs-10.safetensors", "rough-10.safetensors"} <= set(TASK_AGENTS)
 
 
 def test_bad_input_is_one_line(capsys):
@@ -388,6 +398,62 @@ def test_a_steer_residual_agents_baselines_drive_the_plain_gait_on_its_episodes(
         assert "\n" not in str(error.value)
     with pytest.raises(ValueError, match="observation 'extended' or 'terrain'"):
         snakesim.SnakeEnv(joints=5, action={"mode": "gait", "steer_residual": True})
+
+
+def test_near_the_goal_steer_drives_and_the_baselines_run_without_the_hand_over(tmp_path):
+    """``action.steer_near_goal``: within that distance of the goal baseline:steer's action drives
+    whatever the agent's action; ``--env-from`` such a model runs the baselines without the hand-over;
+    bad values are one line."""
+    from safetensors import safe_open
+    from safetensors.numpy import load_file, save_file
+
+    source = ROOT / "models" / "goal-10.safetensors"
+    with safe_open(str(source), "np") as f:
+        meta = dict(f.metadata())
+    recorded = json.loads(meta["env_config"])
+    recorded["action"]["steer_near_goal"] = 10.0
+    recorded["goal_distribution"]["distance"] = [5.0, 9.0]  # every goal within the hand-over
+    model = tmp_path / "handed-goal-10.safetensors"
+    save_file(load_file(str(source)), str(model), metadata={**meta, "env_config": json.dumps(recorded)})
+
+    agent, baseline = load_agent(str(model)), load_agent("baseline:steer", env_from=str(model))
+    assert agent.env_kwargs["action"]["steer_near_goal"] == 10.0
+    assert "steer_near_goal" not in baseline.env_kwargs["action"]
+    assert {**baseline.env_kwargs, "action": None} == {**agent.env_kwargs, "action": None}
+
+    # Every goal lies within 10 m: whatever the action, the env steps as the plain one driven by steer's
+    # action, clip(-atan2(gx, -gy), -1, 1) computed as the env computes it (libm's float32 arctangent,
+    # which numpy's can differ from in the last bit).
+    libm = ctypes.CDLL(ctypes.util.find_library("m"))
+    libm.atan2f.restype = ctypes.c_float
+    libm.atan2f.argtypes = (ctypes.c_float, ctypes.c_float)
+    handed = snakesim.envs.env.make_env(**agent.env_kwargs)
+    plain = snakesim.envs.env.make_env(**baseline.env_kwargs)
+    for seed, action in ((3, [1.0, -1.0, 1.0]), (4, [-1.0, 1.0, -0.5])):
+        obs_h, _ = handed.reset(seed=seed)
+        obs_p, _ = plain.reset(seed=seed)
+        for _ in range(30):
+            np.testing.assert_array_equal(obs_h, obs_p)
+            gx, gy = obs_p[22:24]
+            assert np.hypot(gx, gy) < 10
+            steer = np.clip(-np.float32(libm.atan2f(gx, -gy)), -1, 1)
+            obs_h, *_ = handed.step(np.array(action, np.float32))
+            obs_p, *_ = plain.step(np.array([steer, 0, 0], np.float32))
+        # The action itself would have driven elsewhere.
+        handed.reset(seed=seed)
+        plain.reset(seed=seed)
+        obs_h, *_ = handed.step(np.array(action, np.float32))
+        obs_q, *_ = plain.step(np.array(action, np.float32))
+        assert not np.array_equal(obs_q, obs_h)
+
+    for action, kind, message in (
+        ({"mode": "joints", "steer_near_goal": 2.0}, ValueError, "steer_near_goal: needs action mode 'gait'"),
+        ({"mode": "gait", "steer_near_goal": 11.0}, ValueError, r"steer_near_goal: must be in \[0, 10\] m"),
+        ({"mode": "gait", "steer_near_goal": "near"}, TypeError, "action.steer_near_goal: invalid type"),
+    ):
+        with pytest.raises(kind, match=message) as error:
+            snakesim.SnakeGoalEnv(joints=10, action=action)
+        assert "\n" not in str(error.value)
 
 
 def test_a_larger_height_map_sees_farther_and_bad_maps_are_one_line():
