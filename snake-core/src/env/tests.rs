@@ -967,14 +967,15 @@ fn progress_around_ridges_measures_the_way_around_them() {
     assert!((progress - (straight(origin) - straight(e.position))).abs() > 0.5);
 }
 
+/// baseline:steer as snakesim.agents.baselines writes it: the goal's bearing in the head frame (its
+/// -y ahead, +x to the left) from the observation's goal vector, steering clip(-bearing).
+fn steer(obs: &[f32], joints: usize) -> f32 {
+    let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
+    (-gx.atan2(-gy)).clamp(-1.0, 1.0)
+}
+
 #[test]
 fn zero_steer_residuals_drive_baseline_steer() {
-    // baseline:steer as snakesim.agents.baselines writes it: the goal's bearing in the head frame
-    // (its -y ahead, +x to the left) from the observation's goal vector, steering clip(-bearing).
-    fn steer(obs: &[f32], joints: usize) -> f32 {
-        let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
-        (-gx.atan2(-gy)).clamp(-1.0, 1.0)
-    }
     for observation in [ObservationLayout::Extended, ObservationLayout::Terrain] {
         let plain = EnvConfig {
             observation,
@@ -1005,12 +1006,7 @@ fn zero_steer_residuals_drive_baseline_steer() {
 #[test]
 fn near_the_goal_baseline_steer_drives_whatever_the_action() {
     use rand::{Rng, SeedableRng};
-    // baseline:steer as snakesim.agents.baselines writes it (see the test above), and the goal's
-    // distance from the same goal vector.
-    fn steer(obs: &[f32], joints: usize) -> f32 {
-        let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
-        (-gx.atan2(-gy)).clamp(-1.0, 1.0)
-    }
+    // The goal's distance from the goal vector that `steer` reads.
     fn distance(obs: &[f32], joints: usize) -> f64 {
         f64::from(obs[2 + 2 * joints]).hypot(f64::from(obs[3 + 2 * joints]))
     }
