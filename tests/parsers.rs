@@ -206,3 +206,34 @@ proptest! {
         checks::env_keywords(&apply(all[seed.index(all.len())].clone(), &e));
     }
 }
+
+/// A rough ground's parameters over many orders of magnitude (a world file's `ground: rough`, the
+/// env's `terrain.rough`): each either generates its grid or is refused in one line before anything
+/// is allocated. Before the lattice check, a wavelength of 1e-9 panicked (capacity overflow) and
+/// 3e-4 aborted the process asking for 22 GB.
+fn log_uniform(low: f64, high: f64) -> impl Strategy<Value = f64> {
+    (low.log10()..high.log10()).prop_map(|e| 10f64.powf(e))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn any_rough_ground_is_generated_or_refused_in_one_line(
+        wavelength in log_uniform(1e-12, 1e3),
+        spacing in log_uniform(1e-3, 1e3),
+        size in log_uniform(1e-2, 2e4),
+        hills in log_uniform(1e-12, 1e3),
+    ) {
+        let world = format!(
+            "ground: {{rough: {{amplitude: 0.05, wavelength: {wavelength:e}, seed: 1, \
+             size: [{size:e}, {size:e}], spacing: {spacing:e}}}}}\n"
+        );
+        checks::world_file(world.as_bytes());
+        let keywords = format!(
+            r#"{{"task": "rough", "joints": 2, "terrain": {{"rough": {{"wavelength": {wavelength:e},
+               "hills_wavelength": {hills:e}, "spacing": {spacing:e}}}}}}}"#
+        );
+        checks::env_keywords(keywords.as_bytes());
+    }
+}

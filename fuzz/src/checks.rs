@@ -50,13 +50,26 @@ pub fn run_config(bytes: &[u8]) {
     }
 }
 
-/// The env's keywords (JSON: `snakesim.SnakeEnv(**kwargs)`, a model's `env` metadata).
+/// The env's keywords (JSON: `snakesim.SnakeEnv(**kwargs)`, a model's `env` metadata); a config that
+/// parses is made into an env and reset once, where its terrain is drawn and allocated (a rough
+/// ground's noise lattice, its grid, pegs): an env or a one-line error, never a panic or an abort.
 pub fn env_keywords(bytes: &[u8]) {
     let Ok(Value::Object(keywords)) = serde_json::from_slice::<Value>(bytes) else {
         return;
     };
-    if let Err(e) = env_from_keywords(&keywords) {
-        one_line(&e.0);
+    match env_from_keywords(&keywords) {
+        Ok(config) => {
+            // Small snakes only: a reset of many joints is slow, not wrong.
+            if config.snake.joints > 16 {
+                return;
+            }
+            let reset = snake_core::SnakeEnv::new(config)
+                .and_then(|mut env| env.reset(Some(1), Default::default()));
+            if let Err(e) = reset {
+                one_line(&e.to_string());
+            }
+        }
+        Err(e) => one_line(&e.0),
     }
 }
 

@@ -156,10 +156,13 @@ pub fn atlas(args: &AtlasArgs) -> Result<()> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let existing = match std::fs::read_to_string(&args.out) {
-        Ok(text) => Some(text),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-        Err(e) => bail!("cannot read {}: {e}", args.out.display()),
+    let existing = if args.out.exists() {
+        Some(
+            snake_core::files::read_text(&args.out, snake_core::limits::MAX_CONFIG_BYTES, "atlas")
+                .map_err(|e| anyhow::anyhow!(e.message()))?,
+        )
+    } else {
+        None
     };
     let md_file = OutputFile::new(&args.out, "atlas", &["md"])?;
     std::fs::create_dir_all(&args.figures)

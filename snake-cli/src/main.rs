@@ -65,7 +65,8 @@ fn main() -> ExitCode {
         Err(err) if output::is_closed_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             // One line: the error and its causes, for people and for scripts.
-            eprintln!("error: {err:#}");
+            // At most MAX_ERROR_CHARS, escaped: the causes may quote a user's value at any length.
+            eprintln!("error: {}", snake_core::error::one_line(format!("{err:#}")));
             ExitCode::FAILURE
         }
     }

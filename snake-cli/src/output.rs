@@ -52,13 +52,25 @@ pub fn is_closed_pipe(error: &anyhow::Error) -> bool {
         .any(|e| e.0.kind() == io::ErrorKind::BrokenPipe)
 }
 
-/// An output file being written: checked up front, written to a temporary file beside the target,
-/// renamed over the target by [`OutputFile::commit`]; dropped uncommitted, it leaves the target as
-/// it was.
+/// An output file being written: checked up front, written to a temporary file, and moved to the
+/// target by [`OutputFile::commit`]; dropped uncommitted, it leaves the target as it was.
+///
+/// What the target may be:
+/// - a new path, or a regular file: the temporary file sits beside it and is renamed over it; a
+///   link to a regular file keeps the link and replaces the file it points to;
+/// - a character device (`/dev/null`, a terminal) or a FIFO that someone reads: written through,
+///   never replaced by a file;
+/// - never a FIFO that nobody reads, a socket or block device, a directory, or a file this run read
+///   as an input
+///   (`--output` onto the robot file), whatever path names it: refused in one line.
 #[derive(Debug)]
 pub struct OutputFile {
     path: PathBuf,
     temp: PathBuf,
+    /// The target, open, when it is a character device or a FIFO: the contents are copied into it,
+    /// not renamed over it. (Opened up front and held: a FIFO's reader would see the end of the
+    /// stream if it were closed and opened again.)
+    through: Option<std::fs::File>,
     committed: bool,
 }
 
@@ -83,23 +95,27 @@ impl OutputFile {
                 extensions.join(" or .")
             );
         }
-        if path.is_dir() {
-            bail!("cannot write {what} to {shown}: it is a directory");
-        }
-        // The temporary file keeps the extension, for writers that choose the format by it.
+        let (target, through) = check_target(path, what)?;
+        // The temporary file keeps the extension, for writers that choose the format by it; for a
+        // device it goes to the temporary directory, not beside the device.
         let temp_name = match &ext {
             Some(ext) => format!(".{name}.partial{}.{ext}", std::process::id()),
             None => format!(".{name}.partial{}", std::process::id()),
         };
-        let temp = path.with_file_name(temp_name);
+        let temp = if through.is_some() {
+            std::env::temp_dir().join(format!("snake-cli{temp_name}"))
+        } else {
+            target.with_file_name(temp_name)
+        };
         std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&temp)
             .with_context(|| format!("cannot write {what} to {shown}"))?;
         Ok(OutputFile {
-            path: path.to_path_buf(),
+            path: target,
             temp,
+            through,
             committed: false,
         })
     }
@@ -114,13 +130,90 @@ impl OutputFile {
         &self.path
     }
 
-    /// Moves the finished contents over the target.
+    /// Moves the finished contents to the target (renamed over a file, copied into a device).
     pub fn commit(mut self) -> Result<()> {
-        std::fs::rename(&self.temp, &self.path)
-            .with_context(|| format!("cannot write {}", self.path.display()))?;
+        let shown = self.path.display();
+        if snake_core::files::is_input(&self.path) {
+            bail!("cannot write {shown}: it is one of this run's inputs");
+        }
+        if let Some(device) = self.through.take() {
+            let contents =
+                std::fs::read(&self.temp).with_context(|| format!("cannot write {shown}"))?;
+            write_through(device, &contents).with_context(|| format!("cannot write {shown}"))?;
+            // The temporary file is removed on drop.
+            return Ok(());
+        }
+        std::fs::rename(&self.temp, &self.path).with_context(|| format!("cannot write {shown}"))?;
         self.committed = true;
         Ok(())
     }
+}
+
+/// Writes `bytes` into a device or FIFO opened without blocking: a full pipe is waited on, a millisecond
+/// at a time, until its reader takes more.
+fn write_through(mut device: std::fs::File, mut bytes: &[u8]) -> io::Result<()> {
+    while !bytes.is_empty() {
+        match device.write(bytes) {
+            Ok(0) => return Err(io::ErrorKind::WriteZero.into()),
+            Ok(n) => bytes = &bytes[n..],
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                std::thread::sleep(std::time::Duration::from_millis(1))
+            }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    device.flush()
+}
+
+/// Where an output at `path` goes and, for a character device or a FIFO, the target opened for
+/// writing through; refuses what must not be written (see [`OutputFile`]).
+fn check_target(path: &Path, what: &str) -> Result<(PathBuf, Option<std::fs::File>)> {
+    use std::os::unix::fs::FileTypeExt;
+    use std::os::unix::fs::OpenOptionsExt;
+    let shown = path.display();
+    let meta = match std::fs::metadata(path) {
+        Ok(meta) => meta,
+        // A new file (or a link to nothing, which the file replaces).
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok((path.to_path_buf(), None)),
+        Err(e) => bail!("cannot write {what} to {shown}: {e}"),
+    };
+    let kind = meta.file_type();
+    if kind.is_dir() {
+        bail!("cannot write {what} to {shown}: it is a directory");
+    }
+    if snake_core::files::is_input(path) {
+        bail!("cannot write {what} to {shown}: it is one of this run's inputs");
+    }
+    if kind.is_char_device() || kind.is_fifo() {
+        // Opened without blocking, so that a FIFO nobody reads is refused now rather than waited on
+        // at the end of the run.
+        return match std::fs::OpenOptions::new()
+            .write(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(path)
+        {
+            Ok(file) => Ok((path.to_path_buf(), Some(file))),
+            Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+                bail!("cannot write {what} to {shown}: a FIFO that nobody reads")
+            }
+            Err(e) => bail!("cannot write {what} to {shown}: {e}"),
+        };
+    }
+    if !kind.is_file() {
+        bail!(
+            "cannot write {what} to {shown}: not a regular file (a socket or block device); give a \
+             file path"
+        );
+    }
+    // A link to a regular file: replace the file, keep the link.
+    let target = if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+        path.canonicalize()
+            .with_context(|| format!("cannot write {what} to {shown}"))?
+    } else {
+        path.to_path_buf()
+    };
+    Ok((target, None))
 }
 
 impl Drop for OutputFile {
@@ -208,6 +301,79 @@ mod tests {
         assert!(e.to_string().contains("directory"), "{e}");
         assert!(OutputFile::new(&dir.path().join("x.PNG"), "plot", &["png"]).is_ok());
         assert_eq!(std::fs::read_to_string(&keep).unwrap(), "precious");
+    }
+
+    #[test]
+    fn devices_are_written_through_and_fifos_refused_never_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        let out = OutputFile::new(Path::new("/dev/null"), "trajectory", &[]).unwrap();
+        assert!(
+            !out.temp_path().starts_with("/dev"),
+            "no temporary file in /dev"
+        );
+        std::fs::write(out.temp_path(), "rows").unwrap();
+        out.commit().unwrap();
+        let full = OutputFile::new(Path::new("/dev/full"), "trajectory", &[]).unwrap();
+        std::fs::write(full.temp_path(), "rows").unwrap();
+        let e = full.commit().unwrap_err();
+        assert!(format!("{e:#}").contains("No space left"), "{e:#}");
+        for device in ["/dev/null", "/dev/full"] {
+            let kind = std::fs::metadata(device).unwrap().file_type();
+            assert!(kind.is_char_device(), "{device} is still a device");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe.csv");
+        assert!(std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success());
+        let e = OutputFile::new(&fifo, "trajectory", &[]).unwrap_err();
+        assert!(e.to_string().contains("a FIFO that nobody reads"), "{e}");
+        // With a reader, the contents go through the FIFO.
+        let reader = std::thread::spawn({
+            let fifo = fifo.clone();
+            move || std::fs::read_to_string(fifo).unwrap()
+        });
+        let out = loop {
+            match OutputFile::new(&fifo, "trajectory", &[]) {
+                Ok(out) => break out,
+                Err(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
+            }
+        };
+        std::fs::write(out.temp_path(), "rows\n").unwrap();
+        out.commit().unwrap();
+        assert_eq!(reader.join().unwrap(), "rows\n");
+        assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    }
+
+    #[test]
+    fn a_link_keeps_pointing_at_the_file_it_replaces() {
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("real.csv");
+        let link = dir.path().join("link.csv");
+        std::fs::write(&real, "old").unwrap();
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        let out = OutputFile::new(&link, "trajectory", &[]).unwrap();
+        std::fs::write(out.temp_path(), "new").unwrap();
+        out.commit().unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read_to_string(&real).unwrap(), "new");
+    }
+
+    #[test]
+    fn an_input_of_the_run_is_never_an_output() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("robot.yaml");
+        std::fs::write(&input, "urdf: r.urdf\n").unwrap();
+        snake_core::files::read_text(&input, 1000, "robot file").unwrap();
+        let other_name = dir.path().join(".").join("robot.yaml");
+        let e = OutputFile::new(&other_name, "trajectory", &[]).unwrap_err();
+        assert!(e.to_string().contains("one of this run's inputs"), "{e}");
+        assert_eq!(std::fs::read_to_string(&input).unwrap(), "urdf: r.urdf\n");
     }
 
     #[test]

@@ -6,7 +6,8 @@
 
 use std::path::Path;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
+use snake_core::files::excerpt;
 use snake_core::limits::{MAX_TARGET_ROWS, MAX_URDF_BYTES};
 
 /// Targets read from a file, one row per step, columns in the robot's movable-joint order.
@@ -20,17 +21,11 @@ impl TargetTable {
     /// Reads `path` for the joints named `joints` (the robot's movable joints in order).
     pub fn load(path: &Path, joints: &[&str]) -> Result<Self> {
         let shown = path.display();
-        let size = std::fs::metadata(path)
-            .with_context(|| format!("cannot read targets {shown}"))?
-            .len();
         // A row of 512 targets in shortest round-trip form is about 12 kB; an hour of rows at 240 Hz
         // would not fit in memory for large robots, so a file is held to the robot files' size limit
         // times 64.
-        if size > 64 * MAX_URDF_BYTES {
-            bail!("{shown}: {size} bytes is too large for a targets file");
-        }
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read targets {shown}"))?;
+        let text = snake_core::files::read_text(path, 64 * MAX_URDF_BYTES, "targets")
+            .map_err(|e| anyhow::anyhow!(e.message()))?;
         Self::parse(&text, &shown.to_string(), joints)
     }
 
@@ -43,8 +38,8 @@ impl TargetTable {
         let names: Vec<&str> = header.split(',').map(str::trim).collect();
         if names.first() != Some(&"step") {
             bail!(
-                "{file}:1: the first column must be 'step', got '{}'",
-                names[0]
+                "{file}:1: the first column must be 'step' (not quoted: the file may not be a \
+                 targets file at all)"
             );
         }
         // column index (in the file) -> joint index (in the robot)
@@ -53,12 +48,13 @@ impl TargetTable {
         for (c, name) in names.iter().enumerate().skip(1) {
             let Some(j) = joints.iter().position(|n| n == name) else {
                 bail!(
-                    "{file}:1: column '{name}' is not a movable joint of the robot (its joints: {})",
+                    "{file}:1: column {} is not a movable joint of the robot (its joints: {})",
+                    excerpt(name),
                     joints.join(", ")
                 );
             };
             if seen[j] {
-                bail!("{file}:1: joint '{name}' has two columns");
+                bail!("{file}:1: joint {} has two columns", excerpt(name));
             }
             seen[j] = true;
             slot[c] = j;
@@ -83,8 +79,8 @@ impl TargetTable {
             let expected = rows.len() + 1;
             if cells[0].parse::<usize>().ok() != Some(expected) {
                 bail!(
-                    "{file}:{line_no}: step '{}', expected {expected} (one row per physics step, from 1)",
-                    cells[0]
+                    "{file}:{line_no}: step {}, expected {expected} (one row per physics step, from 1)",
+                    excerpt(cells[0])
                 );
             }
             let mut row = vec![0.0; joints.len()];
@@ -92,8 +88,9 @@ impl TargetTable {
                 match cell.parse::<f64>() {
                     Ok(v) if v.is_finite() => row[slot[c]] = v,
                     _ => bail!(
-                        "{file}:{line_no}: {}: '{cell}' is not a finite number",
-                        names[c]
+                        "{file}:{line_no}: {}: {} is not a finite number",
+                        names[c],
+                        excerpt(cell)
                     ),
                 }
             }
@@ -124,7 +121,7 @@ mod tests {
         for (text, expected) in [
             ("step,a\n1,1,2\n", "3 cells"),
             ("step,a\n2,1\n", "expected 1"),
-            ("step,a,c\n1,1,1\n", "column 'c'"),
+            ("step,a,c\n1,1,1\n", "column \"c\""),
             ("step\n1\n", "no column for joint 'a'"),
             ("step,a,a\n1,1,1\n", "two columns"),
             ("step,a\n1,nan\n", "not a finite number"),

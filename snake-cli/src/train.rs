@@ -150,8 +150,9 @@ const INTERRUPTED: u8 = 130;
 pub fn run(args: &TrainArgs, matches: &clap::ArgMatches) -> Result<ExitCode> {
     let mut layers = Vec::new();
     if let Some(path) = &args.config {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read config file {}", path.display()))?;
+        let text =
+            snake_core::files::read_text(path, snake_core::limits::MAX_CONFIG_BYTES, "config file")
+                .map_err(|e| anyhow::anyhow!(e.message()))?;
         layers.push(config::parse_yaml(&text).with_context(|| path.display().to_string())?);
     }
     layers.push(config::parse_overrides(&args.set)?);

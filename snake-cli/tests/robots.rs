@@ -367,7 +367,7 @@ fn bad_robots_are_one_line_and_write_nothing() {
         ),
         (
             vec![good.clone(), "--targets".into(), write("names.csv", "step,k\n1,0\n")],
-            "column 'k' is not a movable joint".into(),
+            "column \"k\" is not a movable joint".into(),
         ),
         (vec![write("robot.txt", "x")], "a robot is a .urdf file".into()),
         (

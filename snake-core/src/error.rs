@@ -56,18 +56,38 @@ pub(crate) fn invalid(message: impl Into<String>) -> Error {
 /// A message as one line, whatever the user's files and values hold: control characters (a newline
 /// inside an XML attribute, a YAML key or a model's metadata, say) are written escaped, as Rust
 /// writes them. Every error of snake-core and snake-rl that quotes a user's input goes through it.
+///
+/// The line is at most [`MAX_ERROR_CHARS`](crate::limits::MAX_ERROR_CHARS) characters: a longer one
+/// (a 1 MB link name quoted) keeps its start and end with ` [...] ` between them.
 pub fn one_line(message: String) -> String {
-    if !message.chars().any(char::is_control) {
+    let message = if message.chars().any(char::is_control) {
+        message
+            .chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_default().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect()
+    } else {
+        message
+    };
+    capped(message)
+}
+
+/// `message` cut in its middle to at most `MAX_ERROR_CHARS` characters.
+fn capped(message: String) -> String {
+    use crate::limits::MAX_ERROR_CHARS;
+    let count = message.chars().count();
+    if count <= MAX_ERROR_CHARS {
         return message;
     }
-    message
-        .chars()
-        .map(|c| {
-            if c.is_control() {
-                c.escape_default().to_string()
-            } else {
-                c.to_string()
-            }
-        })
-        .collect()
+    const CUT: &str = " [...] ";
+    let tail = MAX_ERROR_CHARS / 3;
+    let head = MAX_ERROR_CHARS - tail - CUT.len();
+    let start: String = message.chars().take(head).collect();
+    let end: String = message.chars().skip(count - tail).collect();
+    format!("{start}{CUT}{end}")
 }

@@ -37,6 +37,7 @@
 pub mod config;
 pub mod env;
 pub mod error;
+pub mod files;
 pub mod gait;
 pub mod limits;
 pub mod math;

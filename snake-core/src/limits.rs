@@ -91,6 +91,10 @@ pub const GAIT_PITCH_RATE: (f64, f64) = (0.0, 8.0);
 /// Range of a library gait's constant yaw or pitch offset (steering included), radians.
 pub const GAIT_OFFSET: (f64, f64) = (-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);
 
+/// Range of the sine wave's (snake.py's) wave length and segment length, metres, and of its
+/// start-up ramp, segments.
+pub const GAIT_LENGTH: (f64, f64) = (0.0, 1.0e3);
+
 /// Range of a library gait's start-up ramp, seconds.
 pub const GAIT_RAMP: (f64, f64) = (0.0, 600.0);
 
@@ -103,6 +107,11 @@ pub const MAX_HEIGHTFIELD_SIDE: usize = 4096;
 
 /// Most samples of a heightfield in all (2^21: ~17 MB of doubles in Bullet, plus its accelerator).
 pub const MAX_HEIGHTFIELD_SAMPLES: usize = 1 << 21;
+
+/// Most noise values behind one generated rough ground (its lattice: one value a `wavelength`, over
+/// the grid's extent, drawn before any height): a wavelength far below the spacing would otherwise ask
+/// for gigabytes (1e-9 m asked for more than memory holds). 64 MiB of doubles.
+pub const MAX_NOISE_LATTICE: usize = 4 * MAX_HEIGHTFIELD_SAMPLES;
 
 /// Largest |height| of a heightfield sample, and |z| of an obstacle, metres.
 pub const MAX_TERRAIN_HEIGHT: f64 = 1.0e3;
@@ -130,13 +139,42 @@ pub const MAX_WORLD_FRICTION: f64 = 1.0e3;
 /// coefficient would act as 10 anyway (on the default plane, friction 0.5, a coefficient of 10 acts as 5).
 pub const MAX_SKIN_FRICTION: f64 = 10.0;
 
+/// Largest model file read (a snakesim `.safetensors`, a Stable-Baselines3 `.zip`, or one member of
+/// such a zip once uncompressed), bytes (256 MiB: a network of the largest configurable width holds
+/// far less).
+pub const MAX_MODEL_BYTES: u64 = 256 << 20;
+
+/// Largest small text or metadata file read (a run's config.yaml, a model's JSON, a VecNormalize
+/// statistics file, a sweep manifest), bytes (16 MiB).
+pub const MAX_CONFIG_BYTES: u64 = 16 << 20;
+
+/// Largest CSV read back for a plot, a replay or a calibration (a trajectory, a training log), bytes
+/// (1 GiB).
+pub const MAX_CSV_BYTES: u64 = 1 << 30;
+
+/// Longest error message shown, characters: a message that quotes a user's value (a 1 MB link name)
+/// is cut in its middle to this length, keeping the start (the file and key) and the end (what was
+/// expected). Long enough for the longest list of allowed keys we print.
+pub const MAX_ERROR_CHARS: usize = 600;
+
+/// Deepest nesting of a YAML or XML file we read (flow brackets, block indentation levels or XML
+/// elements): far beyond any real robot, world or run file, and shallow enough that every file within
+/// the size caps parses in well under a second.
+pub const MAX_NESTING: usize = 64;
+
+/// Most attributes of one XML element (a URDF tag has at most a handful).
+pub const MAX_XML_ATTRIBUTES: usize = 64;
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {
         Ok(())
     } else {
         Err(crate::error::invalid(format!(
-            "{what} must be in [{low}, {high}], got {value:?}"
+            "{what} must be in [{}, {}], got {}",
+            short(low),
+            short(high),
+            short(value)
         )))
     }
 }
@@ -154,5 +192,15 @@ pub fn check_position(what: &str, x: f64, y: f64) -> crate::Result<()> {
         Err(crate::error::invalid(format!(
             "{what} must have |x| and |y| at most {MAX_POSITION} m, got ({x:?}, {y:?})"
         )))
+    }
+}
+
+/// A number for a message, short whatever its size: `3600`, `0.05`, `1e300`, `-1e-9`, `NaN` (Rust's
+/// `{}` writes 1e300 as 301 digits).
+pub fn short(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
     }
 }

@@ -261,18 +261,10 @@ impl RobotSpec {
 
     fn from_robot_file(path: &Path) -> Result<Self> {
         let shown = path.display().to_string();
-        let meta =
-            std::fs::metadata(path).map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
-        if meta.len() > MAX_URDF_BYTES {
-            return Err(invalid(format!(
-                "{shown}: too large ({} bytes)",
-                meta.len()
-            )));
-        }
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
+        let text = crate::files::read_text(path, MAX_URDF_BYTES, "robot file")?;
+        crate::files::check_yaml_shape(&text, &shown)?;
         let file: RobotFile = serde_norway::from_str(&text)
-            .map_err(|e| invalid(format!("{shown}: {}", e.to_string().replace('\n', " "))))?;
+            .map_err(|e| crate::files::yaml_error(&shown, "a robot file", &e))?;
         let urdf_path = path
             .parent()
             .unwrap_or_else(|| Path::new(""))

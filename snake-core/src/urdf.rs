@@ -209,16 +209,7 @@ impl UrdfRobot {
     /// Reads and parses a URDF file; mesh files are looked up relative to it.
     pub fn load(path: &Path) -> Result<Self> {
         let shown = path.display();
-        let meta =
-            std::fs::metadata(path).map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
-        if meta.len() > MAX_URDF_BYTES {
-            return Err(invalid(format!(
-                "{shown}: {} bytes, more than the {MAX_URDF_BYTES} a robot file may have",
-                meta.len()
-            )));
-        }
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
+        let text = crate::files::read_text(path, MAX_URDF_BYTES, "URDF")?;
         let mut robot = Self::parse_in(&text, &shown.to_string(), path.parent())?;
         robot.source = Some(path.to_path_buf());
         Ok(robot)
@@ -236,6 +227,7 @@ impl UrdfRobot {
                 "{file}: more than the {MAX_URDF_BYTES} bytes a robot file may have"
             )));
         }
+        crate::files::check_xml_shape(text, file)?;
         let doc = Document::parse(text).map_err(|e| invalid(format!("{file}: not XML: {e}")))?;
         let p = Parser {
             file,

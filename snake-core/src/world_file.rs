@@ -46,8 +46,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{invalid, Result};
 use crate::limits::{
     check_position, check_range, MAX_HEIGHTFIELD_BYTES, MAX_HEIGHTFIELD_SAMPLES,
-    MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES, MAX_OBSTACLE_SIZE, MAX_SLOPE_DEGREES, MAX_TERRAIN_HEIGHT,
-    MAX_WORLD_FRICTION, MAX_YAW,
+    MAX_HEIGHTFIELD_SIDE, MAX_NOISE_LATTICE, MAX_OBSTACLES, MAX_OBSTACLE_SIZE, MAX_SLOPE_DEGREES,
+    MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION, MAX_YAW,
 };
 use crate::math::quaternion_from_euler;
 use crate::world::{BodyId, Dynamics, StaticShape, World};
@@ -584,7 +584,20 @@ pub fn rough_heights(
     rows: usize,
     columns: usize,
     spacing: f64,
-) -> Vec<f32> {
+) -> Result<Vec<f32>> {
+    // The lattice's size, checked in floating point before anything is allocated.
+    let points = |n: usize| ((n.max(1) - 1) as f64 * spacing / wavelength).floor() + 2.0;
+    let (px, py) = (points(rows), points(columns));
+    if (px * py).is_nan() || px * py > MAX_NOISE_LATTICE as f64 {
+        return Err(invalid(format!(
+            "wavelength {} m over {rows} x {columns} samples {} m apart needs {} x {} noise values, \
+             more than {MAX_NOISE_LATTICE}: raise the wavelength (or the spacing)",
+            crate::limits::short(wavelength),
+            crate::limits::short(spacing),
+            crate::limits::short(px),
+            crate::limits::short(py)
+        )));
+    }
     let lattice = |n: usize| ((n - 1) as f64 * spacing / wavelength).floor() as usize + 2;
     let (lx, ly) = (lattice(rows), lattice(columns));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -602,7 +615,7 @@ pub fn rough_heights(
             heights.push((amplitude * (bottom + fy * (top - bottom))) as f32);
         }
     }
-    heights
+    Ok(heights)
 }
 
 /// Parses a heightfield CSV (see the module docs): `shown` names the file in errors. Every line must
@@ -622,17 +635,20 @@ pub fn parse_heightfield_csv(text: &str, shown: &str) -> Result<(usize, usize, V
         for (k, field) in line.split(',').enumerate() {
             let field = field.trim();
             let v: f64 = field.parse().map_err(|_| {
+                // The value is not quoted: a file that is not a heightfield at all (a secret named
+                // by mistake) fails here, and none of it is shown.
                 invalid(format!(
-                    "{shown}: line {}, value {}: {field:?} is not a number",
+                    "{shown}: line {}, value {}: not a number",
                     n + 1,
                     k + 1
                 ))
             })?;
             if !(v.is_finite() && v.abs() <= MAX_TERRAIN_HEIGHT) {
                 return Err(invalid(format!(
-                    "{shown}: line {}, value {}: heights must be finite and at most {MAX_TERRAIN_HEIGHT} m in magnitude, got {field}",
+                    "{shown}: line {}, value {}: heights must be finite and at most {MAX_TERRAIN_HEIGHT} m in magnitude, got {}",
                     n + 1,
-                    k + 1
+                    k + 1,
+                    crate::files::excerpt(field)
                 )));
             }
             if k >= MAX_HEIGHTFIELD_SIDE {
@@ -681,16 +697,7 @@ impl WorldSpec {
     /// Reads and checks a world file; `shown` in every error.
     pub fn load(path: &Path) -> Result<Self> {
         let shown = path.display().to_string();
-        let meta =
-            std::fs::metadata(path).map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
-        if meta.len() > MAX_HEIGHTFIELD_BYTES {
-            return Err(invalid(format!(
-                "{shown}: too large ({} bytes)",
-                meta.len()
-            )));
-        }
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| invalid(format!("{shown}: cannot read: {e}")))?;
+        let text = crate::files::read_text(path, MAX_HEIGHTFIELD_BYTES, "world file")?;
         Self::parse(
             &text,
             &shown,
@@ -703,8 +710,9 @@ impl WorldSpec {
         let file: WorldFile = if text.trim().is_empty() {
             WorldFile::default()
         } else {
+            crate::files::check_yaml_shape(text, shown)?;
             serde_norway::from_str(text)
-                .map_err(|e| invalid(format!("{shown}: {}", shortened(&e.to_string()))))?
+                .map_err(|e| crate::files::yaml_error(shown, "a world file", &e))?
         };
         file.resolve(shown, dir)
     }
@@ -730,22 +738,13 @@ impl WorldFile {
                 check_scale("ground: heightfield: scale", *scale).map_err(e)?;
                 let path = dir.join(file);
                 let csv_shown = path.display().to_string();
-                let meta = std::fs::metadata(&path).map_err(|err| {
-                    invalid(format!(
-                        "{shown}: ground: heightfield: file: {csv_shown}: cannot read: {err}"
-                    ))
-                })?;
-                if meta.len() > MAX_HEIGHTFIELD_BYTES {
-                    return Err(invalid(format!(
-                        "{csv_shown}: too large ({} bytes, at most {MAX_HEIGHTFIELD_BYTES})",
-                        meta.len()
-                    )));
-                }
-                let text = std::fs::read_to_string(&path).map_err(|err| {
-                    invalid(format!(
-                        "{shown}: ground: heightfield: file: {csv_shown}: cannot read: {err}"
-                    ))
-                })?;
+                let text = crate::files::read_text(&path, MAX_HEIGHTFIELD_BYTES, "heightfield")
+                    .map_err(|err| {
+                        invalid(format!(
+                            "{shown}: ground: heightfield: file: {}",
+                            err.message()
+                        ))
+                    })?;
                 let (rows, columns, heights) =
                     parse_heightfield_csv(&text, &csv_shown).map_err(|err| {
                         invalid(format!(
@@ -804,7 +803,10 @@ impl WorldFile {
                 Ground::Heightfield(Heightfield {
                     rows,
                     columns,
-                    heights: rough_heights(*amplitude, *wavelength, *seed, rows, columns, spacing),
+                    heights: rough_heights(*amplitude, *wavelength, *seed, rows, columns, spacing)
+                        .map_err(|err| {
+                            invalid(format!("{shown}: ground: rough: {}", err.message()))
+                        })?,
                     scale: [spacing, spacing, 1.0],
                 })
             }
@@ -835,19 +837,6 @@ impl WorldFile {
             obstacles,
         })
     }
-}
-
-/// A parser's message on one line and at most ~300 characters: serde quotes a mistyped value whole
-/// (a CSV named as the world file would fill the terminal), so the middle of a long one is cut.
-fn shortened(message: &str) -> String {
-    let message = message.replace('\n', " ");
-    let chars: Vec<char> = message.chars().collect();
-    if chars.len() <= 300 {
-        return message;
-    }
-    let head: String = chars[..200].iter().collect();
-    let tail: String = chars[chars.len() - 80..].iter().collect();
-    format!("{head} [...] {tail}")
 }
 
 impl Obstacle {
@@ -1126,9 +1115,9 @@ mod tests {
 
     #[test]
     fn rough_is_deterministic_and_bounded() {
-        let a = rough_heights(0.1, 0.5, 3, 17, 9, 0.0625);
-        assert_eq!(a, rough_heights(0.1, 0.5, 3, 17, 9, 0.0625));
+        let a = rough_heights(0.1, 0.5, 3, 17, 9, 0.0625).unwrap();
+        assert_eq!(a, rough_heights(0.1, 0.5, 3, 17, 9, 0.0625).unwrap());
         assert!(a.iter().all(|h| h.abs() <= 0.1));
-        assert_ne!(a, rough_heights(0.1, 0.5, 4, 17, 9, 0.0625));
+        assert_ne!(a, rough_heights(0.1, 0.5, 4, 17, 9, 0.0625).unwrap());
     }
 }

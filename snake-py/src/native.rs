@@ -575,5 +575,10 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("trial_failures", run::MAX_TRIAL_FAILURES)?;
     d.set_item("search_keys", run::MAX_SEARCH_KEYS)?;
     d.set_item("trial_name", run::MAX_TRIAL_NAME)?;
+    d.set_item("urdf_bytes", core::MAX_URDF_BYTES)?;
+    d.set_item("model_bytes", core::MAX_MODEL_BYTES)?;
+    d.set_item("config_bytes", core::MAX_CONFIG_BYTES)?;
+    d.set_item("csv_bytes", core::MAX_CSV_BYTES)?;
+    d.set_item("error_chars", core::MAX_ERROR_CHARS)?;
     Ok(d)
 }

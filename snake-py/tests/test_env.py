@@ -137,7 +137,7 @@ def test_render_rgb_array_shows_snake_and_goal():
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
-        ({"joints": 0}, ValueError, r"^joints: must be in \[1, 512\], got 0"),
+        ({"joints": 0}, ValueError, r"^joints: must be in \[1, 128\], got 0"),
         ({"joints": 2.5}, TypeError, "^joints: invalid type: floating point `2.5`"),
         ({"preset": "heavy"}, ValueError, "^preset: unknown variant `heavy`"),
         ({"observation": "pixels"}, ValueError, "^observation: unknown variant `pixels`"),

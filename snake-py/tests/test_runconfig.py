@@ -141,7 +141,7 @@ def test_precedence_defaults_yaml_then_flags(tmp_path):
     [
         ({"arch": "huge"}, "^arch: unknown variant `huge`"),
         ({"trainer": "jax"}, "^trainer: unknown variant `jax`"),
-        ({"joints": 0}, r"^joints: must be in \[1, 512\], got 0"),
+        ({"joints": 0}, r"^joints: must be in \[1, 128\], got 0"),
         ({"joints": "five"}, '^joints: invalid type: string "five", expected a non-negative integer'),
         ({"joints": 2.5}, "^joints: invalid type: floating point `2.5`, expected a non-negative integer"),
         ({"bogus": 1}, "^bogus: unknown field `bogus`"),

@@ -399,6 +399,7 @@ pub fn merge(base: &mut Value, overlay: &Value) {
 
 /// Parses YAML text into a JSON value (YAML 1.2 scalars: `3e-4` is a number, `yes` a string).
 pub fn parse_yaml(text: &str) -> Result<Value, ConfigError> {
+    snake_core::files::check_yaml_shape(text, "the config").map_err(|e| err(e.message()))?;
     let value: Value = serde_norway::from_str(text).map_err(|e| {
         let at = e
             .location()
@@ -1009,7 +1010,7 @@ mod tests {
         );
         let e = |text: &str| env_from_keywords(&kw(text)).unwrap_err().0;
         assert!(e(r#"{"joints": 2.5}"#).starts_with("joints: invalid type: floating point `2.5`"));
-        assert!(e(r#"{"joints": 0}"#).starts_with("joints: must be in [1, 512], got 0"));
+        assert!(e(r#"{"joints": 0}"#).starts_with("joints: must be in [1, 128], got 0"));
         assert!(e(r#"{"joints": true}"#).starts_with("joints: invalid type: boolean"));
         assert!(e(r#"{"preset": "x"}"#).starts_with("preset: unknown variant `x`"));
         assert!(e(r#"{"action_scale": "2"}"#).starts_with("action_scale: invalid type: string"));

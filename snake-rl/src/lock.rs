@@ -60,7 +60,8 @@ impl WriterLock {
                 }
                 Err(std::fs::TryLockError::WouldBlock) => {
                     let mut holder = String::new();
-                    let _ = file.read_to_string(&mut holder);
+                    // A lock file holds one short line; read no more than a page of it.
+                    let _ = (&file).take(4096).read_to_string(&mut holder);
                     let waited = if wait.is_zero() {
                         String::new()
                     } else {

@@ -603,7 +603,8 @@ fn find_env_files(env: &mut Map<String, Value>, model: &Path) {
 }
 
 fn read(path: &Path) -> Result<Vec<u8>, ModelError> {
-    std::fs::read(path).map_err(|e| ModelError(format!("cannot read {}: {e}", path.display())))
+    snake_core::files::read_bytes(path, snake_core::limits::MAX_MODEL_BYTES, "model")
+        .map_err(|e| ModelError(e.message()))
 }
 
 /// Reads a policy file (or the policy of a checkpoint).

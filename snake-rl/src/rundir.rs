@@ -160,12 +160,18 @@ impl RunDir {
     /// An existing run to resume: its saved configuration.
     pub fn open(path: &Path) -> Result<(Self, RunConfig), RunDirError> {
         let config_path = path.join(CONFIG_FILE);
-        let text = std::fs::read_to_string(&config_path).map_err(|_| {
-            RunDirError(format!(
-                "cannot resume {}: no readable {CONFIG_FILE} there",
+        if !config_path.exists() {
+            return Err(RunDirError(format!(
+                "cannot resume {}: no {CONFIG_FILE} there",
                 path.display()
-            ))
-        })?;
+            )));
+        }
+        let text = snake_core::files::read_text(
+            &config_path,
+            snake_core::limits::MAX_CONFIG_BYTES,
+            "run config",
+        )
+        .map_err(|e| RunDirError(format!("cannot resume {}: {}", path.display(), e.message())))?;
         let config = RunConfig::from_yaml(&text)
             .map_err(|e: ConfigError| RunDirError(format!("{}: {e}", config_path.display())))?;
         Ok((
@@ -256,7 +262,12 @@ impl RunDir {
     /// Keeps the evaluations up to `timesteps` (a resumed run redoes the later ones).
     pub fn keep_evaluations_up_to(&self, timesteps: u64) -> Result<(), RunDirError> {
         let path = self.path.join(EVALUATIONS_FILE);
-        let text = std::fs::read_to_string(&path).unwrap_or_default();
+        let text = if path.exists() {
+            snake_core::files::read_text(&path, snake_core::limits::MAX_CSV_BYTES, "evaluations")
+                .map_err(|e| RunDirError(e.message()))?
+        } else {
+            String::new()
+        };
         let mut kept = Vec::new();
         for (k, line) in text.lines().enumerate().skip(1) {
             let steps = line
@@ -268,9 +279,10 @@ impl RunDir {
                 Some(_) => {}
                 None => {
                     return Err(RunDirError(format!(
-                        "{}: line {} is not an evaluation row: '{line}'",
+                        "{}: line {} is not an evaluation row: {}",
                         path.display(),
-                        k + 1
+                        k + 1,
+                        snake_core::files::excerpt(line)
                     )))
                 }
             }
@@ -294,10 +306,11 @@ impl RunDir {
         versions: &Map<String, Value>,
     ) -> Result<(), RunDirError> {
         let path = self.path.join(VERSIONS_FILE);
-        let mut recorded: Map<String, Value> = std::fs::read_to_string(&path)
-            .ok()
-            .and_then(|t| serde_json::from_str(&t).ok())
-            .unwrap_or_default();
+        let mut recorded: Map<String, Value> =
+            snake_core::files::read_text(&path, snake_core::limits::MAX_CONFIG_BYTES, "versions")
+                .ok()
+                .and_then(|t| serde_json::from_str(&t).ok())
+                .unwrap_or_default();
         let changed: Map<String, Value> = versions
             .iter()
             .filter(|(k, v)| recorded.get(*k) != Some(v))

@@ -577,7 +577,11 @@ impl TerrainDistribution {
                 )));
             }
             let n = side as usize;
-            let a = rough_heights(r.amplitude, r.wavelength, bumps, n, n, r.spacing);
+            let key = |name: &'static str| {
+                move |e: crate::Error| invalid(format!("terrain.rough.{name}: {}", e.message()))
+            };
+            let a = rough_heights(r.amplitude, r.wavelength, bumps, n, n, r.spacing)
+                .map_err(key("wavelength"))?;
             let b = rough_heights(
                 r.hills_amplitude,
                 r.hills_wavelength,
@@ -585,7 +589,8 @@ impl TerrainDistribution {
                 n,
                 n,
                 r.spacing,
-            );
+            )
+            .map_err(key("hills_wavelength"))?;
             let mut heights: Vec<f32> = a.iter().zip(&b).map(|(x, y)| x + y).collect();
             // The craters draw from the hills' seed on a stream of its own: adding them moves no
             // hill and no peg.

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::Gait;
 use crate::error::{invalid, Result};
+use crate::limits::{check_range, short, GAIT_AMPLITUDE, GAIT_LENGTH, GAIT_PERIOD};
 
 /// Lateral undulation as pybullet's `examples/snake.py` drives it: a sine wave of joint angles that
 /// travels from the head (the base) to the tail.
@@ -77,19 +78,26 @@ impl LateralUndulation {
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
                 return Err(invalid(format!(
-                    "gait {name} must be positive and finite, got {v}"
+                    "gait {name} must be positive and finite, got {}",
+                    short(v)
                 )));
             }
         }
-        for (name, v) in [
-            ("amplitude", self.amplitude),
-            ("segment_length", self.segment_length),
-            ("ramp_segments", self.ramp_segments),
-            ("steering", self.steering),
+        // The same ranges as the library's gaits, where the parameter means the same.
+        for (name, v, (lo, hi)) in [
+            ("amplitude", self.amplitude, GAIT_AMPLITUDE),
+            ("period", self.period, GAIT_PERIOD),
+            ("wave_length", self.wave_length, GAIT_LENGTH),
+            ("segment_length", self.segment_length, GAIT_LENGTH),
+            ("ramp_segments", self.ramp_segments, GAIT_LENGTH),
         ] {
-            if !v.is_finite() {
-                return Err(invalid(format!("gait {name} must be finite, got {v}")));
-            }
+            check_range(&format!("gait {name}"), v, lo, hi)?;
+        }
+        if !self.steering.is_finite() {
+            return Err(invalid(format!(
+                "gait steering must be finite, got {}",
+                self.steering
+            )));
         }
         if self.steering <= -1.0 {
             return Err(invalid(format!(
