@@ -40,7 +40,10 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
     let mut paths = files(&format!("fuzz/seeds/{target}"), None);
     match target {
         "model_file" => paths.extend(files("models", Some("safetensors"))),
-        "run_config" => paths.extend(files("snake-py/configs", Some("yaml"))),
+        "run_config" => {
+            paths.extend(files("snake-py/configs", Some("yaml")));
+            paths.extend(files("experiments/rough-terrain-agents", Some("yaml")));
+        }
         "urdf" => paths.extend(files("robots", Some("urdf"))),
         "robot_file" => paths.extend(files("robots", Some("yaml"))),
         "world_file" => {

@@ -3,7 +3,7 @@
 //! snake-cli writes the physics trace (see [`crate::trace`]) and `snakesim convert` logs it with
 //! Rerun's Python SDK. Rerun's Rust SDK is not linked in: its current release (0.41, the viewer's
 //! version in requirements.lock) needs a newer Rust than this project's toolchain, and the newest one
-//! that builds here pulls in ~540 crates against the workspace's ~190 (measured figures in the README).
+//! that builds here pulls in ~540 crates against the workspace's ~190 (measured figures in docs/architecture.md, "Rerun recordings from `snake-cli run --rrd`").
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};

@@ -54,13 +54,6 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "paper-tuned-10",
         "paper-tuned-5",
         "pegs-10",
-        "rough-10-blind",
-        "rough-10-crater-end",
-        "rough-10-crater-route",
-        "rough-10-crater",
-        "rough-10-hills",
-        "rough-10-ridge-residual",
-        "rough-10-ridge",
         "rough-10",
     ]
     by_name = dict(zip(names, CONFIGS, strict=True))

@@ -182,7 +182,7 @@ pub fn run_episodes(
 /// `seed + i`, env `i` contributing `(episodes + i) / m` episodes, each measured as [`Episode`]
 /// says. `episodes` must be at least 1. The episodes come back in their own order (env 0's in
 /// turn, then env 1's, ...), not in the order they end, so that the i-th episode of two policies'
-/// runs is the same episode (`scripts/win_overlap.py` compares them so).
+/// runs is the same episode (`experiments/ground-or-controller/win_overlap.py` compares them so).
 pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     act: &mut Actor<'_, A>,
     config: &EnvConfig,

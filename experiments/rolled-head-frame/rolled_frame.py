@@ -1,9 +1,10 @@
 """Steer in the extended layout's head frame (the head's x axis) against the terrain layout's rolled
 head frame, on the same episodes, with the share of each episode the head spent upside down
-(docs/tasks.md, "The head frame on hills").
-Usage: rolled_frame.py [EPISODES] [SEED] [GROUND]; GROUND is ``rough`` (SnakeRough-v0's defaults) or
-a world file such as ``worlds/slope-10.yaml`` (the goal task on it, with the rough task's goals,
-5-8 m at any bearing, and its 30 s episodes)."""
+(docs/tasks.md, "The head frame on hills"; this folder's README).
+Usage, from the repository root: .venv/bin/python experiments/rolled-head-frame/rolled_frame.py
+[EPISODES] [SEED] [GROUND]; GROUND is ``rough`` (SnakeRough-v0's defaults) or a world file such as
+``worlds/slope-10.yaml`` (relative to the working directory; the goal task on it, with the rough
+task's goals, 5-8 m at any bearing, and its 30 s episodes)."""
 
 from __future__ import annotations
 

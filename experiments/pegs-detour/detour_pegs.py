@@ -1,6 +1,8 @@
 """A hand-tuned detour controller for snakesim/SnakePegs-v0: it steers the wave first to a waypoint
 beside the peg band (2.5 m to the side of the band's middle), then to the goal. It shows that the
-goal is reachable around the field (docs/tasks.md). Usage: detour_pegs.py [EPISODES] [SEED] [JOINTS]."""
+goal is reachable around the field (this folder's README). Usage, from the repository root:
+.venv/bin/python experiments/pegs-detour/detour_pegs.py [EPISODES] [SEED] [JOINTS] [SIDE] (SIDE: the
+waypoint's distance beside the band, 2.5 m by default)."""
 
 from __future__ import annotations
 

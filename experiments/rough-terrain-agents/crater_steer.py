@@ -1,11 +1,12 @@
 """A hand-made controller for snakesim/SnakeRough-v0 with a crater in the way (the env of
-snake-py/configs/rough-10-crater.yaml) that sees the ground: ``baseline:steer`` in the
+experiments/rough-terrain-agents/rough-10-crater.yaml) that sees the ground: ``baseline:steer`` in the
 terrain observation's rolled head frame, except that where the height map shows a drop ahead (a
 crater's wall: a point up to 1.5 m ahead more than DROP below the head) it turns away from the deeper
 side until the way ahead is clear. It measures whether seeing the crater is enough, without learning,
-to go around it (docs/tasks.md, "A crater in the way").
-Usage: crater_steer.py [EPISODES] [SEED] [DROP] [CONFIG] (CONFIG: a run configuration whose env to
-run, rough-10-crater.yaml's by default)."""
+to go around it (this folder's README, "A crater in the way").
+Usage, from the repository root: .venv/bin/python experiments/rough-terrain-agents/crater_steer.py
+[EPISODES] [SEED] [DROP] [CONFIG] (CONFIG: a run configuration whose env to run, rough-10-crater.yaml
+beside this script by default)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from snakesim.agents.evaluation import run_episodes, summarize
 from snakesim.runs import config as runconfig
 
 #: The crater attempt's run configuration, whose env this controller runs in.
-CONFIG = Path(__file__).resolve().parents[1] / "snake-py" / "configs" / "rough-10-crater.yaml"
+CONFIG = Path(__file__).resolve().parent / "rough-10-crater.yaml"
 
 
 def crater_steer(joints: int, drop: float):

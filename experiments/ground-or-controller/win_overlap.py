@@ -3,8 +3,9 @@
 beside what independent coins of the same rates would share, the pair's correlation (phi), and how
 many controllers won each episode beside the count independence predicts. High overlap means the
 episode decides (some are hard); overlap near independence means each run is a draw
-(docs/tasks.md, "What did not work").
-Usage: win_overlap.py EVAL.json EVAL.json [...]"""
+(this folder's README).
+Usage, from the repository root: .venv/bin/python experiments/ground-or-controller/win_overlap.py
+EVAL.json EVAL.json [...]"""
 
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ def independent_counts(rates: list[float]) -> np.ndarray:
 def main() -> None:
     paths = sys.argv[1:]
     if len(paths) < 2:
-        sys.exit("usage: win_overlap.py EVAL.json EVAL.json [...]")
+        sys.exit("usage: experiments/ground-or-controller/win_overlap.py EVAL.json EVAL.json [...]")
     table = np.array([wins(p) for p in paths])
     if len({len(row) for row in table}) != 1:
         sys.exit("the files hold different numbers of episodes")

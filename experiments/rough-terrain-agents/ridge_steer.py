@@ -1,15 +1,17 @@
 """A hand-made controller for snakesim/SnakeRough-v0 with a ridge across the way (the env of
-snake-py/configs/rough-10-ridge.yaml) that sees the ground: ``baseline:steer`` in the terrain
-observation's rolled head frame, except that where the height map shows ground ahead (up to 1.5 m)
-more than RISE above the head it turns, at full steering, towards the lower side (chosen when it first
-sees the rise and kept), and once the way ahead is clear goes straight on for HOLD seconds before it
-steers at the goal again: a bug algorithm's wall following, as far as a 1.5 m height map allows. It
-measures whether seeing the ridge is enough, without learning, to go around it (docs/tasks.md, "A
-ridge across the way"). Its memory belongs to an env slot of the batch, not to an episode: an episode
-that starts while the slot's previous episode was holding straight holds on for the rest of HOLD.
-Usage: ridge_steer.py [EPISODES] [SEED] [RISE] [HOLD] [CONFIG] (CONFIG: a run configuration whose env
-to run, rough-10-ridge.yaml's by default; its height map, whatever its size, is the one the rule reads:
-ahead is the rows in front of the head's, the sides the columns beside its own)."""
+experiments/rough-terrain-agents/rough-10-ridge.yaml) that sees the ground: ``baseline:steer`` in the
+terrain observation's rolled head frame, except that where the height map shows ground ahead (up to
+1.5 m) more than RISE above the head it turns, at full steering, towards the lower side (chosen when
+it first sees the rise and kept), and once the way ahead is clear goes straight on for HOLD seconds
+before it steers at the goal again: a bug algorithm's wall following, as far as a 1.5 m height map
+allows. It measures whether seeing the ridge is enough, without learning, to go around it (this
+folder's README, "A ridge across the way"). Its memory belongs to an env slot of the batch, not to an
+episode: an episode that starts while the slot's previous episode was holding straight holds on for
+the rest of HOLD.
+Usage, from the repository root: .venv/bin/python experiments/rough-terrain-agents/ridge_steer.py
+[EPISODES] [SEED] [RISE] [HOLD] [CONFIG] (CONFIG: a run configuration whose env to run,
+rough-10-ridge.yaml beside this script by default; its height map, whatever its size, is the one the
+rule reads: ahead is the rows in front of the head's, the sides the columns beside its own)."""
 
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from snakesim.agents.evaluation import run_episodes, summarize
 from snakesim.runs import config as runconfig
 
 #: The ridge attempt's run configuration, whose env this controller runs in.
-CONFIG = Path(__file__).resolve().parents[1] / "snake-py" / "configs" / "rough-10-ridge.yaml"
+CONFIG = Path(__file__).resolve().parent / "rough-10-ridge.yaml"
 
 #: Env steps a second (the goal task's 30 Hz actions).
 STEPS_PER_SECOND = 30

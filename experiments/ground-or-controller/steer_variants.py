@@ -1,7 +1,8 @@
 """Is a task's failure the ground's or the controller's? Runs ``baseline:steer`` with fixed gait
 settings (amplitude and frequency actions, steering gain) on the same episodes and counts, per
-episode, how many of the variants reach the goal (docs/tasks.md, "What did not work").
-Usage: steer_variants.py [EPISODES] [SEED] [TASK] [JOINTS] [--nudge] [--rolled]; TASK is goal, pegs
+episode, how many of the variants reach the goal (this folder's README).
+Usage, from the repository root: .venv/bin/python experiments/ground-or-controller/steer_variants.py
+[EPISODES] [SEED] [TASK] [JOINTS] [--nudge] [--rolled]; TASK is goal, pegs
 or rough. ``--nudge`` runs steer's own wave with its steering gain changed by 0.1 % steps instead
 (NUDGED): a task whose outcomes such a change flips is decided by chaos, not by the ground.
 ``--rolled`` gives steer the terrain observation, whose goal bearing is in the rolled head frame
