@@ -430,6 +430,174 @@ fn failed_runs_leave_existing_files_alone() {
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
 
+/// Hostile or careless files (issue 45's cases and variants): a device, a FIFO or another program's
+/// file as an input, outputs onto devices, FIFOs and the run's own inputs, parser bombs and a rough
+/// ground that once asked for gigabytes. Each is one line, fast, non-zero, and leaves every file as
+/// it was.
+#[test]
+fn hostile_files_are_one_line_and_nothing_is_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    use std::time::{Duration, Instant};
+    let dir = temp("hostile");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let write = |name: &str, text: &str| {
+        std::fs::write(dir.join(name), text).unwrap();
+        path(name)
+    };
+    let fifo = path("pipe.yaml");
+    let fifo_urdf_file = path("pipe.urdf");
+    for f in [&fifo, &fifo_urdf_file] {
+        let _ = std::fs::remove_file(f);
+        assert!(Command::new("mkfifo").arg(f).status().unwrap().success());
+    }
+    let robots = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots");
+    let robot = write("r.yaml", &format!("urdf: {robots}/paper-cubes-5.urdf\n"));
+    let zero_urdf = write("z.yaml", "urdf: /dev/zero\n");
+    let fifo_urdf = write("f.yaml", &format!("urdf: {fifo}\n"));
+    let nested = write(
+        "deep.yaml",
+        &format!("ground: {}{}\n", "[".repeat(100_000), "]".repeat(100_000)),
+    );
+    let attrs: String = (0..200_000).map(|k| format!(" a{k}=\"1\"")).collect();
+    let many = write(
+        "many.urdf",
+        &format!("<robot name=\"r\"><link name=\"a\"{attrs}/></robot>"),
+    );
+    let long_name = write(
+        "long.urdf",
+        &format!(
+            "<robot name=\"r\"><link name=\"{}\"/><link name=\"{}\"/></robot>",
+            "x".repeat(1 << 20),
+            "x".repeat(1 << 20)
+        ),
+    );
+    let passwd_hf = write(
+        "hf.yaml",
+        "ground: {heightfield: {file: /etc/passwd, scale: [1, 1, 1]}}\n",
+    );
+    let tiny_wavelength = write(
+        "w.yaml",
+        "ground: {rough: {amplitude: 0.05, wavelength: 1.0e-9, seed: 3, size: [15, 15], spacing: 0.25}}\n",
+    );
+    let abort_wavelength = write(
+        "w2.yaml",
+        "ground: {rough: {amplitude: 0.05, wavelength: 0.0003, seed: 3, size: [15, 15], spacing: 0.25}}\n",
+    );
+    let passwd = std::fs::read_to_string("/etc/passwd").unwrap_or_default();
+    let secret = passwd.lines().next().unwrap_or("root:x:0:0").to_string();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["--world".into(), "/etc/passwd".into()],
+            "not a world file",
+        ),
+        (
+            vec!["--world".into(), "/dev/zero".into()],
+            "not a regular file",
+        ),
+        (vec!["--world".into(), fifo.clone()], "not a regular file"),
+        (
+            vec!["--robot".into(), fifo_urdf_file.clone()],
+            "not a regular file",
+        ),
+        (vec!["--robot".into(), zero_urdf], "not a regular file"),
+        (vec!["--robot".into(), fifo_urdf], "not a regular file"),
+        (vec!["--world".into(), nested], "nested more than 64"),
+        (vec!["--robot".into(), many], "more than 64 attributes"),
+        (vec!["--robot".into(), long_name], "[...]"),
+        (
+            vec!["--world".into(), passwd_hf],
+            "line 1, value 1: not a number",
+        ),
+        (
+            vec!["--world".into(), tiny_wavelength],
+            "raise the wavelength",
+        ),
+        (
+            vec!["--world".into(), abort_wavelength],
+            "raise the wavelength",
+        ),
+        (
+            vec!["--gait-param".into(), "amplitude=-5".into()],
+            "gait amplitude must be in [0, 1.5707963267948966]",
+        ),
+        (
+            vec!["--gait-param".into(), "period=1e-300".into()],
+            "gait period must be in [0.05, 600], got 1e-300",
+        ),
+        (
+            vec![
+                "--robot".into(),
+                robot.clone(),
+                "--output".into(),
+                robot.clone(),
+            ],
+            "one of this run's inputs",
+        ),
+        (
+            vec![
+                "--robot".into(),
+                robot.clone(),
+                "--output".into(),
+                format!("{robots}/../robots/paper-cubes-5.urdf"),
+            ],
+            "one of this run's inputs",
+        ),
+        (
+            vec!["--output".into(), fifo.clone()],
+            "a FIFO that nobody reads",
+        ),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["run".to_string(), "--seconds".into(), "0.05".into()];
+        args.extend(extra);
+        let started = Instant::now();
+        let out = Command::new(env!("CARGO_BIN_EXE_snake-cli"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let took = started.elapsed();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(needle),
+            "{args:?}: {stderr} should say {needle}"
+        );
+        assert!(
+            stderr.chars().count() <= 620,
+            "{args:?}: a line of {} characters",
+            stderr.len()
+        );
+        assert!(
+            !stderr.contains(&secret),
+            "{args:?} quotes /etc/passwd: {stderr}"
+        );
+        assert!(took < Duration::from_secs(5), "{args:?} took {took:?}");
+    }
+    // Devices are written through, never replaced by a file.
+    let out = snake_cli(&["run", "--seconds", "0.05", "--output", "/dev/null"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if std::fs::File::create("/dev/full").is_ok() {
+        let out = snake_cli(&["run", "--seconds", "0.05", "--output", "/dev/full"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains("No space left on device"), "{stderr}");
+    }
+    for device in ["/dev/null", "/dev/full"] {
+        let kind = std::fs::metadata(device).unwrap().file_type();
+        assert!(kind.is_char_device(), "{device} was replaced");
+    }
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    assert_eq!(
+        std::fs::read_to_string(&robot).unwrap(),
+        format!("urdf: {robots}/paper-cubes-5.urdf\n")
+    );
+}
+
 /// The C++ shim and Bullet under valgrind's memcheck: a short episode with resets and a gait run with
 /// outputs show no invalid reads or writes, no use of uninitialised values and no definite leaks.
 /// (`scripts/setup` installs valgrind; without it the test says so and passes.)

@@ -54,13 +54,21 @@ pub fn read_bytes(path: &Path, cap: u64, what: &str) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// Every file this process has read through [`read_bytes`], by (device, inode): an output must never
-/// replace one of its own run's inputs (`--output` onto the robot file), whatever path names it.
-static INPUTS: Mutex<BTreeSet<(u64, u64)>> = Mutex::new(BTreeSet::new());
+/// Every file this process has read through [`read_bytes`]: an output must never replace one of its
+/// own run's inputs (`--output` onto the robot file), whatever path names it.
+static INPUTS: Mutex<BTreeSet<FileVersion>> = Mutex::new(BTreeSet::new());
+
+/// One version of one file: its device and inode, and its modification time, since a file removed
+/// while the process runs frees its inode for a new file.
+type FileVersion = (u64, u64, i64, i64);
+
+fn version(meta: &std::fs::Metadata) -> FileVersion {
+    (meta.dev(), meta.ino(), meta.mtime(), meta.mtime_nsec())
+}
 
 fn remember_input(meta: &std::fs::Metadata) {
     if let Ok(mut inputs) = INPUTS.lock() {
-        inputs.insert((meta.dev(), meta.ino()));
+        inputs.insert(version(meta));
     }
 }
 
@@ -71,7 +79,7 @@ pub fn is_input(path: &Path) -> bool {
     };
     INPUTS
         .lock()
-        .map(|inputs| inputs.contains(&(meta.dev(), meta.ino())))
+        .map(|inputs| inputs.contains(&version(&meta)))
         .unwrap_or(false)
 }
 
@@ -245,18 +253,21 @@ pub fn excerpt(value: &str) -> String {
 /// and a text that is not a mapping at all (a file that is not ours, `/etc/passwd` say) is named as
 /// such without a word of it. `what` names the expected content, e.g. "a world file".
 pub fn yaml_error(shown: &str, what: &str, error: &serde_norway::Error) -> crate::Error {
-    let at = error
-        .location()
-        .map(|l| format!(":{}:{}", l.line(), l.column()))
-        .unwrap_or_default();
+    let location = error.location().map(|l| (l.line(), l.column()));
     let message = error.to_string();
     let message = message.split(" at line ").next().unwrap_or(&message);
-    if message.starts_with("invalid type") && message.contains("expected struct") && at == ":1:1" {
+    if message.starts_with("invalid type")
+        && message.contains("expected struct")
+        && location == Some((1, 1))
+    {
         return invalid(format!(
             "{shown}: not {what} (expected a YAML mapping of its keys)"
         ));
     }
-    invalid(format!("{shown}{at}: {}", quoted_excerpts(message)))
+    let at = location
+        .map(|(line, column)| format!(" at line {line} column {column}"))
+        .unwrap_or_default();
+    invalid(format!("{shown}: {}{at}", quoted_excerpts(message)))
 }
 
 /// `message` with every double-quoted or backquoted part cut to an [`excerpt`].

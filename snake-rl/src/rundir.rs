@@ -162,7 +162,7 @@ impl RunDir {
         let config_path = path.join(CONFIG_FILE);
         if !config_path.exists() {
             return Err(RunDirError(format!(
-                "cannot resume {}: no {CONFIG_FILE} there",
+                "cannot resume {}: no readable {CONFIG_FILE} there",
                 path.display()
             )));
         }
