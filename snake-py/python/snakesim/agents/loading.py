@@ -1,17 +1,27 @@
-"""Trained agents: loading them (run directories, SB3 2.x zips, the paper's SB3 1.x zips) and running
-evaluation episodes.
+"""Trained agents: loading them (native models, run directories, SB3 2.x zips, the paper's SB3 1.x
+zips, baselines) and what they need to act.
 
 An :class:`Agent` is a policy plus what it needs to act in snakesim: the env keywords it was trained
-with and, for runs trained with ``normalize: true``, the observation statistics.
+with and, for SB3 models trained with ``normalize: true``, the observation statistics.
+
+:func:`load_agent` finds out once what a path holds (:func:`_locate`) and hands it to the one reader of
+that format, which reads each file once. Loading never runs code from a file: a native model is JSON
+and tensors parsed by Rust; of an SB3 zip only the JSON ``data`` (as plain data: no pickled entry is
+unpickled) and ``policy.pth`` (``torch.load(weights_only=True)``) are read, and the network is rebuilt
+from the shapes of its weights; VecNormalize statistics are unpickled through an allow-list
+(:mod:`snakesim.agents.safe_pickle`). See docs/formats.md.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import os
-import pickle
+import re
+import stat
 import zipfile
+import zlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -20,10 +30,12 @@ import numpy as np
 
 from snakesim import extras
 from snakesim.envs.config import ENV_DEFAULTS
+from snakesim.files import FileError, check_size, open_regular, read_bytes
 from snakesim.limits import LIMITS
 from snakesim.runs import config as runconfig
 from snakesim.runs.rundir import (
     CONFIG_FILE,
+    EXPORTED_STATISTICS_SUFFIX,
     MODEL_FILE,
     NATIVE_MODEL_FILE,
     VECNORMALIZE_FILE,
@@ -60,6 +72,8 @@ class Agent:
     # "sb3" (policy: an SB3 ActorCriticPolicy), "native" (a _core.NativePolicy) or "baseline" (a
     # snakesim.agents.baselines.Controller)
     kind: str = "sb3"
+    # The files it was read from (model, config.yaml, statistics): what a command must not overwrite.
+    files: tuple[str, ...] = ()
 
     @property
     def joints(self) -> int:
@@ -94,24 +108,13 @@ class Agent:
         return actions
 
 
-def _head(path: str | os.PathLike, size: int) -> bytes:
-    try:
-        with open(path, "rb") as f:
-            return f.read(size)
-    except OSError:
-        return b""
+#: ``baseline:NAME`` names a hand-made controller of the goal task (snakesim.agents.baselines).
+BASELINE_PREFIX = "baseline:"
+#: The entry of an SB3 zip's ``data`` where ``snakesim export`` records the env keywords (plain JSON).
+EXPORTED_ENV_KEY = "snakesim_env_kwargs"
 
-
-def model_format(path: str | os.PathLike) -> str | None:
-    """What a model file holds, judged by its first bytes rather than its name: ``"safetensors"`` (a
-    snakesim model: an 8-byte header length, then the JSON header), ``"zip"`` (a Stable-Baselines3
-    model), or None (neither, or unreadable)."""
-    head = _head(path, 9)
-    if head[:4] == b"PK\x03\x04":
-        return "zip"
-    if len(head) == 9 and head[8:9] == b"{" and 0 < int.from_bytes(head[:8], "little") < 1 << 32:
-        return "safetensors"
-    return None
+# Largest observation or action length a model may declare (a snake of MAX_JOINTS joints has ~1000).
+_MAX_SPACE_SIZE = LIMITS["space_size"]
 
 
 def _first_line(error: BaseException, limit: int = 160) -> str:
@@ -121,134 +124,112 @@ def _first_line(error: BaseException, limit: int = 160) -> str:
     return f"{type(error).__name__}: {first[:limit]}{'...' if len(first) > limit else ''}"
 
 
-# Largest observation or action length a model may declare (a snake of MAX_JOINTS joints has ~1000).
-_MAX_SPACE_SIZE = LIMITS["space_size"]
+# -- what a path holds ----------------------------------------------------------------------------
+def _sniff(path: Path) -> str | None:
+    """``"safetensors"``, ``"zip"`` or None, by the first bytes of a regular file; OSError and
+    FileError pass through."""
+    with open_regular(path, "model_bytes") as f:
+        head = f.read(9)
+    if head[:4] == b"PK\x03\x04":
+        return "zip"
+    if len(head) == 9 and head[8:9] == b"{" and 0 < int.from_bytes(head[:8], "little") < 1 << 32:
+        return "safetensors"
+    return None
 
 
-def load_normalizer(path: str | os.PathLike):
-    """A ``VecNormalize`` saved beside a model, for evaluation (not updated); AgentError when the file
-    is not one."""
-    from stable_baselines3.common.vec_env import VecNormalize
-
+def model_format(path: str | os.PathLike) -> str | None:
+    """What a model file holds, judged by its first bytes rather than its name: ``"safetensors"`` (a
+    snakesim model: an 8-byte header length, then the JSON header), ``"zip"`` (a Stable-Baselines3
+    model), or None (neither, or unreadable)."""
     try:
-        with open(path, "rb") as f:
-            normalizer = pickle.load(f)
-    except Exception as error:  # noqa: BLE001 - unpickling garbage fails in many ways
-        raise AgentError(f"{os.fspath(path)} is not a VecNormalize pickle: {_first_line(error)}") from None
-    if not isinstance(normalizer, VecNormalize):
-        held = type(normalizer).__name__
-        raise AgentError(f"{os.fspath(path)} is not a VecNormalize pickle (it holds {held})")
-    normalizer.training = False
-    return normalizer
+        return _sniff(Path(path))
+    except (OSError, FileError):
+        return None
 
 
-def inspect_model(path: str | os.PathLike) -> ModelInfo:
-    """Reads a SB3 zip's metadata; AgentError when it is not one."""
+def normalizer_beside(zip_path: str | os.PathLike) -> Path | None:
+    """The VecNormalize statistics that belong to an SB3 zip, when they are there: ``NAME_vecnormalize.pkl``
+    beside ``NAME.zip`` (what ``snakesim export`` writes), or a run directory's own (``vecnormalize.pkl``
+    beside ``model.zip``, ``vecnormalize_<T>_steps.pkl`` beside ``model_<T>_steps.zip``)."""
+    path = Path(zip_path)
+    candidates = [path.with_name(path.stem + EXPORTED_STATISTICS_SUFFIX)]
+    if path.name == MODEL_FILE:
+        candidates.append(path.with_name(VECNORMALIZE_FILE))
+    match = re.fullmatch(r"model_(\d+)_steps\.zip", path.name)
+    if match:
+        candidates.append(path.with_name(f"vecnormalize_{match.group(1)}_steps.pkl"))
+    return next((c for c in candidates if c.is_file()), None)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Located:
+    """What :func:`load_agent` was given, found out once: the reader's format and its files."""
+
+    format: str  # "native" or "sb3"
+    model: Path
+    config: dict[str, Any] | None = None  # a run directory's config.yaml
+    normalizer: Path | None = None  # an SB3 model's VecNormalize statistics
+    run: Path | None = None  # the run directory
+
+    @property
+    def files(self) -> tuple[str, ...]:
+        """Every file the agent is read from."""
+        config = None if self.run is None else self.run / CONFIG_FILE
+        return tuple(os.fspath(f) for f in (self.model, config, self.normalizer) if f is not None)
+
+
+def _locate(source: Path) -> _Located:
     try:
-        with zipfile.ZipFile(path) as archive:
-            names = set(archive.namelist())
-            if "data" not in names or "policy.pth" not in names:
-                raise AgentError(f"{os.fspath(path)} is not a Stable-Baselines3 model (no data/policy.pth)")
-            data = json.loads(archive.read("data"))
-            version = (
-                archive.read("_stable_baselines3_version").decode().strip()
-                if "_stable_baselines3_version" in names
-                else "unknown"
-            )
+        mode = os.stat(source).st_mode
     except FileNotFoundError:
-        raise AgentError(f"{os.fspath(path)} does not exist") from None
-    except (zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError, IsADirectoryError):
-        raise AgentError(f"{os.fspath(path)} is not a Stable-Baselines3 model zip") from None
-
-    def shape(space: Any) -> list[int]:
-        # gym (SB3 1.x) wrote "shape", gymnasium writes "_shape".
-        return list(space["shape"] if "shape" in space else space["_shape"])
-
+        raise AgentError(f"{source} does not exist (expected a run directory or a model .zip)") from None
+    except OSError as error:
+        raise AgentError(f"cannot read {source}: {error.strerror or error}") from None
+    if stat.S_ISDIR(mode):
+        return _locate_in_run(source)
+    if not stat.S_ISREG(mode):
+        raise AgentError(f"{source}: not a regular file (a device, FIFO or socket)")
     try:
-        obs_shape = shape(data["observation_space"])
-        act_shape = shape(data["action_space"])
-        space_type = str(data["observation_space"].get(":type:", ""))
-    except (KeyError, TypeError, AttributeError):
-        raise AgentError(f"{os.fspath(path)} has no Box observation/action spaces") from None
-    flat = len(obs_shape) == 1 and len(act_shape) == 1
-    if not flat or not all(type(n) is int and 0 < n <= _MAX_SPACE_SIZE for n in obs_shape + act_shape):
-        raise AgentError(f"{os.fspath(path)}: expected flat Box spaces, got {obs_shape} and {act_shape}")
-    legacy = version.startswith(("0.", "1.")) or "'gym." in space_type
-    steps = data.get("num_timesteps")
-    return ModelInfo(
-        version, int(obs_shape[0]), int(act_shape[0]), legacy, steps if isinstance(steps, int) else None
+        kind = _sniff(source)
+    except FileError as error:
+        raise AgentError(str(error)) from None
+    except OSError as error:
+        raise AgentError(f"cannot read {source}: {error.strerror or error}") from None
+    # A file that is neither by content is judged by its name, for the reader's own error.
+    kind = kind or {".zip": "zip", ".safetensors": "safetensors"}.get(source.suffix)
+    if kind == "safetensors":
+        return _Located("native", source)
+    if kind == "zip":
+        return _Located("sb3", source, normalizer=normalizer_beside(source))
+    raise AgentError(
+        f"{source} is neither a snakesim model (safetensors) nor a Stable-Baselines3 model (zip)"
     )
 
 
-def _spaces(obs_dim: int, act_dim: int):
-    from gymnasium import spaces
-
-    return (
-        spaces.Box(-np.inf, np.inf, (obs_dim,), dtype=np.float32),
-        spaces.Box(-1.0, 1.0, (act_dim,), dtype=np.float32),
-    )
-
-
-def _load_legacy_policy(path: Path, info: ModelInfo, device: str):
-    """An SB3 1.x zip (gym spaces, 1.x schedules) as an SB3 2.x ActorCriticPolicy.
-
-    Nothing of the zip is unpickled: the spaces come from its JSON, every pickled field is replaced,
-    and the weights are renamed where 1.x named them differently (shared layers).
-    """
-    from stable_baselines3.common.policies import ActorCriticPolicy
-    from stable_baselines3.common.save_util import load_from_zip_file
-
-    from snakesim.runs.policies import convert_legacy_state_dict, parse_legacy_net_arch, policy_kwargs
-
-    with zipfile.ZipFile(path) as archive:
-        raw = json.loads(archive.read("data"))
-    observation_space, action_space = _spaces(info.observation_dim, info.action_dim)
-    replacements = {"observation_space": observation_space, "action_space": action_space}
-    custom = {
-        key: replacements.get(key)
-        for key, value in raw.items()
-        if isinstance(value, Mapping) and ":serialized:" in value
-    }
-    data, params, _ = load_from_zip_file(path, custom_objects=custom, device=device)
-    kwargs = dict((data or {}).get("policy_kwargs") or {})
-    net_arch = kwargs.pop("net_arch", None)
-    if kwargs:
-        raise AgentError(f"{path}: unsupported SB3 1.x policy_kwargs {sorted(kwargs)} (only net_arch)")
-    if (data or {}).get("use_sde"):
-        raise AgentError(f"{path}: SB3 1.x models with gSDE are not supported")
+def _locate_in_run(run: Path) -> _Located:
+    """A run directory: its config.yaml, and its final model, else its latest checkpoint."""
+    config_path = run / CONFIG_FILE
+    if not config_path.is_file():
+        raise AgentError(f"{run} is not a run directory (no {CONFIG_FILE})")
     try:
-        arch, shared = parse_legacy_net_arch(net_arch)
-    except ValueError as error:
-        raise AgentError(f"{path}: {error}") from None
-    policy = ActorCriticPolicy(
-        observation_space,
-        action_space,
-        lambda _: 0.0,
-        **policy_kwargs(arch, shared=shared or (128, 128)),
-    ).to(device)
-    try:
-        policy.load_state_dict(convert_legacy_state_dict(params["policy"]))
-    except RuntimeError as error:
-        first = str(error).strip().splitlines()[0]
-        raise AgentError(f"{path}: the weights do not fit the SB3 1.x network: {first}") from None
-    policy.set_training_mode(False)
-    return policy, arch
+        config = runconfig.load(config_path)
+    except runconfig.ConfigError as error:
+        raise AgentError(str(error)) from None
+    native = config["trainer"] == "native"
+    model = run / (NATIVE_MODEL_FILE if native else MODEL_FILE)
+    normalizer = run / VECNORMALIZE_FILE
+    if not model.is_file():
+        found = checkpoints(run, native=native)
+        if not found:
+            raise AgentError(f"{run} has no {model.name} and no checkpoints yet")
+        steps, model = found[-1]
+        normalizer = checkpoint_paths(run, steps)[1]
+    if native:
+        return _Located("native", model, config, run=run)
+    return _Located("sb3", model, config, normalizer if normalizer.is_file() else None, run)
 
 
-def _load_policy(path: Path, info: ModelInfo, device: str):
-    if info.legacy:
-        return _load_legacy_policy(path, info, device)
-    from stable_baselines3 import PPO
-
-    try:
-        model = PPO.load(path, device=device)
-    except Exception as error:  # noqa: BLE001 - a corrupt zip fails in torch or pickle in many ways
-        raise AgentError(f"cannot load {path} as a PPO model: {_first_line(error)}") from None
-    extractor = type(model.policy.features_extractor).__name__
-    arch = "large" if extractor == "SharedMlp" else "small"
-    return model.policy, arch
-
-
+# -- loading --------------------------------------------------------------------------------------
 def load_agent(
     source: str | os.PathLike,
     *,
@@ -260,7 +241,7 @@ def load_agent(
     env_from: str | os.PathLike | None = None,
 ) -> Agent:
     """A run directory (its final model, else its latest checkpoint; its config.yaml), a bare SB3 zip
-    or a native ``.safetensors`` model.
+    (with the statistics beside it, see :func:`normalizer_beside`) or a native ``.safetensors`` model.
 
     For a run directory, ``joints`` and ``preset`` must agree with its config when given. For a bare
     zip, ``joints`` defaults to what the model's action space says and ``preset`` to ``paper``; a
@@ -276,85 +257,10 @@ def load_agent(
         raise AgentError(
             "--env and --env-from are for baselines: a model evaluates on the env it was trained on"
         )
-    source = Path(source)
-    config = None
-    normalizer_path = None
-    kind = model_format(source) if source.is_file() else None
-    if source.is_file() and kind is None and source.suffix not in (".zip", ".safetensors"):
-        raise AgentError(
-            f"{source} is neither a snakesim model (safetensors) nor a Stable-Baselines3 model (zip): "
-            f"it starts with {_head(source, 8)!r}"
-        )
-    native = kind == "safetensors" or (kind is None and source.suffix == ".safetensors")
-    if source.is_dir() and (source / CONFIG_FILE).is_file():
-        try:
-            native = runconfig.load(source / CONFIG_FILE)["trainer"] == "native"
-        except runconfig.ConfigError as error:
-            raise AgentError(str(error)) from None
-    if native:
-        return _load_native_agent(source, joints=joints, preset=preset, env_overrides=env_overrides)
-    if source.is_dir():
-        config_path = source / CONFIG_FILE
-        if not config_path.is_file():
-            raise AgentError(f"{source} is not a run directory (no {CONFIG_FILE})")
-        try:
-            config = runconfig.load(config_path)
-        except runconfig.ConfigError as error:
-            raise AgentError(str(error)) from None
-        model_path = source / MODEL_FILE
-        normalizer_path = source / VECNORMALIZE_FILE
-        if not model_path.is_file():
-            found = checkpoints(source)
-            if not found:
-                raise AgentError(f"{source} has no {MODEL_FILE} and no checkpoints yet")
-            steps, model_path = found[-1]
-            normalizer_path = checkpoint_paths(source, steps)[1]
-        for name, given in (("joints", joints), ("preset", preset)):
-            if given is not None and given != config[name]:
-                raise AgentError(f"{source} was trained with {name} {config[name]}, not {given}")
-        env_kwargs = runconfig.env_kwargs(config)
-    elif source.exists() or source.suffix == ".zip":
-        model_path = source
-        env_kwargs = {"joints": joints, "preset": preset or ENV_DEFAULTS["preset"]}
-    else:
-        raise AgentError(f"{source} does not exist (expected a run directory or a model .zip)")
-
-    info = inspect_model(model_path)
-    if env_kwargs["joints"] is None:
-        env_kwargs["joints"] = info.action_dim
-    env_kwargs.update(env_overrides or {})
-    from snakesim.envs.env import make_env
-
-    try:
-        probe = make_env(**env_kwargs)
-    except (TypeError, ValueError) as error:
-        raise AgentError(str(error)) from None
-    obs_dim, act_dim = probe.observation_space.shape[0], probe.action_space.shape[0]
-    if (info.observation_dim, info.action_dim) != (obs_dim, act_dim):
-        raise AgentError(
-            f"{model_path} expects {info.observation_dim} observations and {info.action_dim} actions, but "
-            f"the env ({env_kwargs['joints']} joints) has {obs_dim} and {act_dim}: pass --joints "
-            f"{info.action_dim} (or the observation it was trained with)"
-        )
-    extras.require("sb3", f"loading the Stable-Baselines3 model {model_path}")
-    policy, arch = _load_policy(model_path, info, device)
-    normalizer = None
-    if normalizer_path is not None and normalizer_path.is_file():
-        normalizer = load_normalizer(normalizer_path)
-    return Agent(
-        policy=policy,
-        path=os.fspath(model_path),
-        env_kwargs=env_kwargs,
-        arch=runconfig.arch_label(config["arch"]) if config else arch,
-        sb3_version=info.sb3_version,
-        num_timesteps=info.num_timesteps,
-        obs_normalizer=normalizer,
-        config=config,
-    )
-
-
-#: ``baseline:NAME`` names a hand-made controller of the goal task (snakesim.agents.baselines).
-BASELINE_PREFIX = "baseline:"
+    located = _locate(Path(source))
+    if located.format == "native":
+        return _read_native(located, joints, preset, env_overrides)
+    return _read_sb3(located, joints, preset, env_overrides, device)
 
 
 def env_kwargs_of(source: str | os.PathLike) -> dict[str, Any]:
@@ -365,6 +271,353 @@ def env_kwargs_of(source: str | os.PathLike) -> dict[str, Any]:
     return dict(load_agent(source).env_kwargs)
 
 
+def _agreed_env(
+    where: Path | str,
+    recorded: dict[str, Any],
+    joints: int | None,
+    preset: str | None,
+    overrides: Mapping[str, Any] | None,
+) -> dict[str, Any]:
+    """The recorded env keywords, with ``overrides``; AgentError when ``joints`` or ``preset`` are
+    given and differ from the recorded ones."""
+    for name, given in (("joints", joints), ("preset", preset)):
+        if given is not None and given != recorded.setdefault(name, given):
+            raise AgentError(f"{where} was trained with {name} {recorded[name]}, not {given}")
+    return {**recorded, **(overrides or {})}
+
+
+def _check_env(model: Path, env_kwargs: dict[str, Any], obs_dim: int, act_dim: int, hint: str = "") -> None:
+    """AgentError unless the env of ``env_kwargs`` has the model's observation and action sizes."""
+    from snakesim.envs.env import make_env
+
+    try:
+        probe = make_env(**env_kwargs)
+    except (TypeError, ValueError) as error:
+        raise AgentError(str(error)) from None
+    has = (probe.observation_space.shape[0], probe.action_space.shape[0])
+    if has != (obs_dim, act_dim):
+        raise AgentError(
+            f"{model} expects {obs_dim} observations and {act_dim} actions, but the env "
+            f"({probe.joints} joints) has {has[0]} and {has[1]}{hint}"
+        )
+
+
+def _read_native(
+    located: _Located, joints: int | None, preset: str | None, overrides: Mapping[str, Any] | None
+) -> Agent:
+    """A native model (a ``.safetensors`` file, or a native run's): Rust reads and checks it."""
+    from snakesim import _core
+
+    try:
+        policy = _core.NativePolicy(os.fspath(located.model))
+    except ValueError as error:
+        raise AgentError(str(error)) from None
+    recorded = {"joints": policy.joints, "preset": policy.preset, **json.loads(policy.env_json())}
+    env_kwargs = _agreed_env(located.model, recorded, joints, preset, overrides)
+    _check_env(located.model, env_kwargs, policy.obs_dim, policy.act_dim)
+    return Agent(
+        policy=policy,
+        path=os.fspath(located.model),
+        env_kwargs=env_kwargs,
+        arch=policy.arch,
+        sb3_version="native",
+        num_timesteps=policy.timesteps,
+        config=located.config,
+        kind="native",
+        files=located.files,
+    )
+
+
+def _read_sb3(
+    located: _Located,
+    joints: int | None,
+    preset: str | None,
+    overrides: Mapping[str, Any] | None,
+    device: str,
+) -> Agent:
+    """An SB3 zip (2.x, or the paper's 1.x), bare or a run's, with its statistics when it has them."""
+    model = located.model
+    archive = _read_zip(model)
+    info = archive.info
+    hint = ""
+    recorded = archive.data.get(EXPORTED_ENV_KEY)
+    if located.config is not None:
+        recorded = runconfig.env_kwargs(located.config)
+        env_kwargs = _agreed_env(model.parent, recorded, joints, preset, overrides)
+    elif isinstance(recorded, dict) and ":serialized:" not in recorded:  # by snakesim export
+        env_kwargs = _agreed_env(model, dict(recorded), joints, preset, overrides)
+    else:
+        bare_joints = info.action_dim if joints is None else joints
+        env_kwargs = {"joints": bare_joints, "preset": preset or ENV_DEFAULTS["preset"], **(overrides or {})}
+        hint = f": pass --joints {info.action_dim} (or the observation it was trained with)"
+    _check_env(model, env_kwargs, info.observation_dim, info.action_dim, hint)
+    extras.require("sb3", f"loading the Stable-Baselines3 model {model}")
+    policy, arch = _sb3_policy(model, archive, device)
+    normalizer = None
+    if located.normalizer is not None:
+        normalizer = load_normalizer(located.normalizer)
+        _check_statistics(located.normalizer, normalizer, info.observation_dim)
+    return Agent(
+        policy=policy,
+        path=os.fspath(model),
+        env_kwargs=env_kwargs,
+        arch=runconfig.arch_label(located.config["arch"]) if located.config else arch,
+        sb3_version=info.sb3_version,
+        num_timesteps=info.num_timesteps,
+        obs_normalizer=normalizer,
+        config=located.config,
+        files=located.files,
+    )
+
+
+# -- SB3 zips -------------------------------------------------------------------------------------
+@dataclasses.dataclass
+class _Zip:
+    """The members of an SB3 zip that loading reads: ``data`` as plain JSON (no entry unpickled) and
+    ``policy.pth`` as bytes."""
+
+    info: ModelInfo
+    data: dict[str, Any]
+    weights: bytes
+
+
+def _member(archive: zipfile.ZipFile, name: str, limit: str, path: Path) -> bytes:
+    # The sizes in the zip's directory bound what is decompressed: zipfile stops at the stated size
+    # (and fails the CRC when the data is longer), so a zip bomb is refused before it is inflated.
+    check_size(archive.getinfo(name).file_size, limit, f"{path}: member {name}")
+    return archive.read(name)
+
+
+def _read_zip(path: Path) -> _Zip:
+    """The zip's ``data`` and ``policy.pth``, read once; AgentError when it is not an SB3 model."""
+    try:
+        raw = read_bytes(path, "model_bytes")
+    except FileError as error:
+        raise AgentError(str(error)) from None
+    except FileNotFoundError:
+        raise AgentError(f"{path} does not exist") from None
+    except IsADirectoryError:
+        raise AgentError(f"{path} is not a Stable-Baselines3 model zip") from None
+    except OSError as error:
+        raise AgentError(f"cannot read {path}: {error.strerror or error}") from None
+    try:
+        with zipfile.ZipFile(io.BytesIO(raw)) as archive:
+            names = set(archive.namelist())
+            if "data" not in names or "policy.pth" not in names:
+                raise AgentError(f"{path} is not a Stable-Baselines3 model (no data/policy.pth)")
+            data = json.loads(_member(archive, "data", "config_bytes", path))
+            weights = _member(archive, "policy.pth", "model_bytes", path)
+            version = "unknown"
+            if "_stable_baselines3_version" in names:
+                version = _member(archive, "_stable_baselines3_version", "config_bytes", path).decode()
+                version = version.strip()
+    except FileError as error:
+        raise AgentError(str(error)) from None
+    except AgentError:
+        raise
+    except (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError, RuntimeError, ValueError):
+        # A damaged directory or member, an unknown compression, an encrypted member, bad JSON or text.
+        raise AgentError(f"{path} is not a Stable-Baselines3 model zip") from None
+    if not isinstance(data, dict):
+        raise AgentError(f"{path} is not a Stable-Baselines3 model zip (its data is not a mapping)")
+    return _Zip(_model_info(path, data, version[:40]), data, weights)
+
+
+def _model_info(path: Path, data: dict[str, Any], version: str) -> ModelInfo:
+    def shape(space: Any) -> list[int]:
+        # gym (SB3 1.x) wrote "shape", gymnasium writes "_shape".
+        return list(space["shape"] if "shape" in space else space["_shape"])
+
+    try:
+        obs_shape = shape(data["observation_space"])
+        act_shape = shape(data["action_space"])
+        space_type = str(data["observation_space"].get(":type:", ""))
+    except (KeyError, TypeError, AttributeError):
+        raise AgentError(f"{path} has no Box observation/action spaces") from None
+    flat = len(obs_shape) == 1 and len(act_shape) == 1
+    if not flat or not all(type(n) is int and 0 < n <= _MAX_SPACE_SIZE for n in obs_shape + act_shape):
+        shown = str(obs_shape)[:40], str(act_shape)[:40]
+        raise AgentError(f"{path}: expected flat Box spaces, got {shown[0]} and {shown[1]}")
+    legacy = version.startswith(("0.", "1.")) or "'gym." in space_type
+    steps = data.get("num_timesteps")
+    return ModelInfo(
+        version, int(obs_shape[0]), int(act_shape[0]), legacy, steps if type(steps) is int else None
+    )
+
+
+def inspect_model(path: str | os.PathLike) -> ModelInfo:
+    """Reads a SB3 zip's metadata; AgentError when it is not one."""
+    return _read_zip(Path(path)).info
+
+
+def safe_custom_objects(path: str | os.PathLike, known: Mapping[str, Any]) -> dict[str, Any]:
+    """``custom_objects`` for SB3's ``PPO.load(path)`` that replace every pickled entry of the zip's
+    ``data`` (so SB3 unpickles none of them): by ``known``'s value where it has one, else by None
+    (what SB3 rebuilds when it starts learning: the last observation, the episode buffers)."""
+    data = _read_zip(Path(path)).data
+    pickled = [key for key, value in data.items() if isinstance(value, Mapping) and ":serialized:" in value]
+    return {key: known.get(key) for key in pickled}
+
+
+# The activations SB3 policies are built with, by the name `data` records for policy_kwargs'
+# activation_fn ("<class 'torch.nn.modules.activation.Tanh'>"); looked up in torch.nn, never unpickled.
+_ACTIVATIONS = ("Tanh", "ReLU", "LeakyReLU", "ELU", "GELU", "SiLU", "Sigmoid")
+_EXTRACTORS = {
+    "<class 'stable_baselines3.common.torch_layers.FlattenExtractor'>",
+    "<class 'snakesim.runs.policies.SharedMlp'>",
+}
+# Where the layers of each part of the network live in an SB3 2.x state dict (Linear, activation, ...).
+_PARTS = {
+    "shared": "features_extractor.shared_net",
+    "pi": "mlp_extractor.policy_net",
+    "vf": "mlp_extractor.value_net",
+}
+
+
+def _sb3_policy(path: Path, archive: _Zip, device: str):
+    """The zip's policy as an SB3 2.x ActorCriticPolicy with snakesim's networks, and its arch label.
+
+    The network is rebuilt from the shapes of the weights (widths of the shared trunk and of the
+    heads) and the plain parts of ``policy_kwargs``; SB3 1.x weights are renamed where 1.x named them
+    differently (shared layers).
+    """
+    import torch
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    from snakesim.runs.policies import convert_legacy_state_dict, policy_kwargs
+
+    info, data = archive.info, archive.data
+    if data.get("use_sde"):
+        raise AgentError(f"{path}: models with gSDE (use_sde) are not supported")
+    try:
+        state = torch.load(io.BytesIO(archive.weights), map_location=device, weights_only=True)
+    except Exception as error:  # noqa: BLE001 - a corrupt policy.pth fails in torch in many ways
+        raise AgentError(f"cannot load {path} as a PPO model: {_first_line(error)}") from None
+    if not isinstance(state, dict) or not all(
+        isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in state.items()
+    ):
+        raise AgentError(f"cannot load {path} as a PPO model: its policy.pth holds no state dict")
+    if info.legacy:
+        state = convert_legacy_state_dict(state)
+    activation = _activation(path, data.get("policy_kwargs"))
+    widths = _widths(path, state, info)
+    try:
+        label = runconfig.arch_label(widths)
+    except runconfig.ConfigError as error:
+        raise AgentError(f"{path}: its network: {error}") from None
+    if not all(bool(torch.isfinite(v).all()) for v in state.values() if v.is_floating_point()):
+        raise AgentError(f"{path}: its weights hold NaN or infinite values")
+    observation_space, action_space = _spaces(info.observation_dim, info.action_dim)
+    kwargs = policy_kwargs(widths)
+    if activation is not None:
+        kwargs["activation_fn"] = activation
+    policy = ActorCriticPolicy(observation_space, action_space, lambda _: 0.0, **kwargs).to(device)
+    try:
+        policy.load_state_dict(state)
+    except RuntimeError as error:
+        first = str(error).strip().splitlines()[0][:200]
+        raise AgentError(f"{path}: the weights do not fit the network: {first}") from None
+    policy.set_training_mode(False)
+    return policy, label
+
+
+def _activation(path: Path, kwargs: Any):
+    """policy_kwargs' activation_fn as a torch.nn class (None: SB3's default, Tanh), and a check that
+    the features extractor is one snakesim builds; read from the JSON that SB3 writes beside a
+    pickled entry, never from the pickle."""
+    import torch
+
+    if not isinstance(kwargs, Mapping):
+        return None
+    extractor = kwargs.get("features_extractor_class")
+    if extractor is not None and extractor not in _EXTRACTORS:
+        raise AgentError(f"{path}: unsupported features extractor {str(extractor)[:80]}")
+    name = kwargs.get("activation_fn")
+    if name is None:
+        return None
+    match = re.fullmatch(r"<class 'torch\.nn\.modules\.activation\.(\w+)'>", str(name))
+    if not match or match.group(1) not in _ACTIVATIONS:
+        raise AgentError(f"{path}: unsupported activation_fn {str(name)[:80]}")
+    return getattr(torch.nn, match.group(1))
+
+
+def _widths(path: Path, state: Mapping[str, Any], info: ModelInfo) -> dict[str, list[int]]:
+    """The widths of the shared trunk and the heads, read from the weights' shapes, checked layer by
+    layer (each Linear takes what the one before gives) before anything is built from them."""
+    widths: dict[str, list[int]] = {}
+    trunk_out = info.observation_dim
+    for part, prefix in _PARTS.items():
+        sizes: list[int] = []
+        width = info.observation_dim if part == "shared" else trunk_out
+        while f"{prefix}.{2 * len(sizes)}.weight" in state:
+            weight = state[f"{prefix}.{2 * len(sizes)}.weight"]
+            if weight.dim() != 2 or weight.shape[1] != width:
+                raise AgentError(
+                    f"{path}: the weights do not fit the network: {prefix}.{2 * len(sizes)}.weight has "
+                    f"shape {list(weight.shape)}, expected [*, {width}]"
+                )
+            width = int(weight.shape[0])
+            sizes.append(width)
+        widths[part] = sizes
+        if part == "shared" and sizes:
+            trunk_out = sizes[-1]
+    # SB3 2.x registers a shared trunk under three names; they must be one set of weights.
+    for key, value in state.items():
+        owner, _, rest = key.partition(".")
+        if owner in ("pi_features_extractor", "vf_features_extractor"):
+            same = state.get(f"features_extractor.{rest}")
+            if same is None or same.shape != value.shape or not bool((same == value).all()):
+                raise AgentError(f"{path}: separate policy and value trunks are not supported")
+    if not widths["pi"] or not widths["vf"]:
+        raise AgentError(f"{path}: the weights do not fit the network: no policy and value layers")
+    return widths
+
+
+def _spaces(obs_dim: int, act_dim: int):
+    from gymnasium import spaces
+
+    return (
+        spaces.Box(-np.inf, np.inf, (obs_dim,), dtype=np.float32),
+        spaces.Box(-1.0, 1.0, (act_dim,), dtype=np.float32),
+    )
+
+
+# -- VecNormalize statistics ----------------------------------------------------------------------
+def load_normalizer(path: str | os.PathLike):
+    """A ``VecNormalize`` saved beside a model, for evaluation (not updated); AgentError when the file
+    is not one. Unpickled through an allow-list (:mod:`snakesim.agents.safe_pickle`): a pickle that
+    names anything else is refused before it runs."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from snakesim.agents.safe_pickle import RefusedPickle, load_statistics
+
+    name = os.fspath(path)
+    try:
+        normalizer = load_statistics(read_bytes(path, "config_bytes"))
+    except FileError as error:
+        raise AgentError(str(error)) from None
+    except RefusedPickle as error:
+        raise AgentError(f"{name}: refused: {error}") from None
+    except OSError as error:
+        raise AgentError(f"cannot read {name}: {error.strerror or error}") from None
+    except Exception as error:  # noqa: BLE001 - unpickling garbage fails in many ways
+        raise AgentError(f"{name} is not a VecNormalize pickle: {_first_line(error)}") from None
+    if not isinstance(normalizer, VecNormalize):
+        raise AgentError(f"{name} is not a VecNormalize pickle (it holds {type(normalizer).__name__})")
+    normalizer.training = False
+    return normalizer
+
+
+def _check_statistics(path: Path, normalizer: Any, obs_dim: int) -> None:
+    """AgentError unless the statistics normalise the model's observations (finite, of its size)."""
+    rms = getattr(normalizer, "obs_rms", None)
+    mean, var = getattr(rms, "mean", None), getattr(rms, "var", None)
+    fits = all(isinstance(a, np.ndarray) and a.shape == (obs_dim,) for a in (mean, var))
+    if not fits or not (np.isfinite(mean).all() and np.isfinite(var).all() and (var >= 0).all()):
+        raise AgentError(f"{path}: not the statistics of {obs_dim} finite observations the model takes")
+
+
+# -- baselines ------------------------------------------------------------------------------------
 def _load_baseline(
     name: str,
     joints: int | None,
@@ -381,12 +634,15 @@ def _load_baseline(
     from snakesim.envs.config import GOAL_ENV_DEFAULTS
     from snakesim.envs.env import make_env
 
+    files: tuple[str, ...] = ()
     if env_from is not None:
         if joints is not None or preset is not None:
             raise AgentError(f"--env-from takes joints and preset from {os.fspath(env_from)}: leave them out")
-        env_kwargs: dict[str, Any] = baselines.plain_gait(
-            {**env_kwargs_of(env_from), **(env_overrides or {})}
-        )
+        if isinstance(env_from, str) and env_from.startswith(BASELINE_PREFIX):
+            raise AgentError(f"--env-from needs a model or a run directory, not {env_from}")
+        source = load_agent(env_from)
+        env_kwargs: dict[str, Any] = baselines.plain_gait({**source.env_kwargs, **(env_overrides or {})})
+        files = source.files
     else:
         env_kwargs = {
             "task": task,
@@ -408,62 +664,5 @@ def _load_baseline(
         sb3_version="-",
         num_timesteps=None,
         kind="baseline",
-    )
-
-
-def _load_native_agent(
-    source: Path,
-    *,
-    joints: int | None,
-    preset: str | None,
-    env_overrides: Mapping[str, Any] | None,
-) -> Agent:
-    """A native run directory (model.safetensors, else its latest checkpoint) or model file."""
-    from snakesim import _core
-    from snakesim.envs.env import make_env
-
-    config = None
-    if source.is_dir():
-        config = runconfig.load(source / CONFIG_FILE)
-        model_path = source / NATIVE_MODEL_FILE
-        if not model_path.is_file():
-            found = checkpoints(source, native=True)
-            if not found:
-                raise AgentError(f"{source} has no {NATIVE_MODEL_FILE} and no checkpoints yet")
-            model_path = found[-1][1]
-    elif source.is_file():
-        model_path = source
-    else:
-        raise AgentError(f"{source} does not exist (expected a run directory or a model file)")
-    try:
-        policy = _core.NativePolicy(os.fspath(model_path))
-    except ValueError as error:
-        raise AgentError(str(error)) from None
-    env_kwargs: dict[str, Any] = {
-        "joints": policy.joints,
-        "preset": policy.preset,
-        **json.loads(policy.env_json()),
-    }
-    for name, given in (("joints", joints), ("preset", preset)):
-        if given is not None and given != env_kwargs[name]:
-            raise AgentError(f"{model_path} was trained with {name} {env_kwargs[name]}, not {given}")
-    env_kwargs.update(env_overrides or {})
-    try:
-        probe = make_env(**env_kwargs)
-    except (TypeError, ValueError) as error:
-        raise AgentError(str(error)) from None
-    if (probe.observation_space.shape[0], probe.action_space.shape[0]) != (policy.obs_dim, policy.act_dim):
-        raise AgentError(
-            f"{model_path} expects {policy.obs_dim} observations and {policy.act_dim} actions, but the env "
-            f"has {probe.observation_space.shape[0]} and {probe.action_space.shape[0]}"
-        )
-    return Agent(
-        policy=policy,
-        path=os.fspath(model_path),
-        env_kwargs=env_kwargs,
-        arch=policy.arch,
-        sb3_version="native",
-        num_timesteps=policy.timesteps,
-        config=config,
-        kind="native",
+        files=files,
     )

@@ -10,19 +10,21 @@
     snakesim search CONFIG.yaml --space space.yaml --trials T --out sweeps/NAME
 
 ``snakesim COMMAND --help`` lists every option. Errors print one line on stderr and exit non-zero
-(2 for bad usage, 1 for anything else, 130 after Ctrl-C).
+(2 for bad usage, 1 for anything else, 130 after Ctrl-C, 143 after SIGTERM).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import sys
 import tempfile
+import threading
 
 from snakesim.cli import evaluate, export, plot, replay, search, sweep, train, view
 from snakesim.cli.args import Parser
-from snakesim.cli.errors import UserError, one_line
+from snakesim.cli.errors import UserError, report
 
 
 def build_parser() -> Parser:
@@ -52,9 +54,43 @@ def _scratch_for_torch():
             del os.environ["TORCHINDUCTOR_CACHE_DIR"]
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is, as Ctrl-C raises KeyboardInterrupt: ``finally`` blocks
+    and context managers run (temporary folders are removed, a trainer saves its checkpoint), then
+    the command exits 143 (128 + SIGTERM), as a process killed by SIGTERM would."""
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds():
+    """Turns SIGTERM into :class:`Terminated` while the command runs (in the main thread only:
+    Python delivers signals there); a second SIGTERM kills at once. Yields a list that holds the
+    signal once it came."""
+    received: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+
+    def terminate(signum, frame):
+        received.append(signum)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        raise Terminated
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
-    with _scratch_for_torch():
-        return _main(argv)
+    try:
+        with _sigterm_unwinds() as received, _scratch_for_torch():
+            code = _main(argv)
+            # A trainer that caught the SIGTERM (and saved its checkpoint) still ends as SIGTERM ends.
+            return 143 if received else code
+    except Terminated:  # arrived outside the command (while arguments were parsed, or cleaning up)
+        print("snakesim: terminated", file=sys.stderr)
+        return 143
 
 
 def _main(argv: list[str] | None) -> int:
@@ -62,6 +98,7 @@ def _main(argv: list[str] | None) -> int:
     args = parser.parse_args(argv)
     from snakesim.agents.loading import AgentError
     from snakesim.extras import MissingExtra
+    from snakesim.files import FileError
     from snakesim.runs.config import ConfigError
     from snakesim.runs.results import TrainingFailed
     from snakesim.runs.rundir import RunDirError
@@ -83,9 +120,13 @@ def _main(argv: list[str] | None) -> int:
         SweepError,
         TrainingFailed,
         MissingExtra,
+        FileError,
     ) as error:
-        print(f"snakesim {args.command}: error: {one_line(error)}", file=sys.stderr)
+        print(report(args.command, error), file=sys.stderr)
         return 1
+    except Terminated:
+        print(f"snakesim {args.command}: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print(f"snakesim {args.command}: interrupted", file=sys.stderr)
         return 130
@@ -96,17 +137,22 @@ def _main(argv: list[str] | None) -> int:
         return 0
     except OSError as error:
         # A full disk, a vanished directory: the system's message, with the file when it names one.
-        where = f" {error.filename}" if error.filename else ""
-        print(f"snakesim {args.command}: error:{where} {error.strerror or error}", file=sys.stderr)
+        where = f"{error.filename} " if error.filename else ""
+        print(report(args.command, f"{where}{error.strerror or error}"), file=sys.stderr)
         return 1
     except Exception as error:  # noqa: BLE001 - the last line of defence: one line, never a traceback
         if os.environ.get("SNAKESIM_TRACEBACK"):
             raise
-        print(
-            f"snakesim {args.command}: error: {type(error).__name__}: {one_line(error)} "
-            "(set SNAKESIM_TRACEBACK=1 for the traceback)",
-            file=sys.stderr,
-        )
+        hint = "(set SNAKESIM_TRACEBACK=1 for the traceback)"
+        print(report(args.command, f"{type(error).__name__}: {error} {hint}"), file=sys.stderr)
+        return 1
+    except BaseException as error:
+        # A Rust panic reaches Python as pyo3's PanicException, which derives from BaseException, not
+        # Exception: one line too. (KeyboardInterrupt and SystemExit went past above or pass on.)
+        if type(error).__name__ != "PanicException" or os.environ.get("SNAKESIM_TRACEBACK"):
+            raise
+        hint = "(a bug; set SNAKESIM_TRACEBACK=1 for the traceback)"
+        print(report(args.command, f"internal error: {error} {hint}"), file=sys.stderr)
         return 1
 
 

@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
 from typing import NoReturn
 
-from snakesim.cli.errors import one_line
+from snakesim.cli.errors import capped, one_line
 from snakesim.envs.config import PRESETS
 from snakesim.limits import LIMITS
 
 
 class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
+        self.exit(2, capped(f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)") + "\n")
 
 
 def int_at_least(minimum: int, maximum: int | None = None):
@@ -113,9 +116,12 @@ def baseline_env_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def load_agent(args: argparse.Namespace):
+def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLike, str]] = ()):
+    """The agent the command's arguments name; UserError when one of the command's ``outputs``
+    ((path, flag), checked writable before) is a file the agent is read from, or two are one file."""
     from snakesim import extras
     from snakesim.agents.loading import load_agent
+    from snakesim.cli.errors import check_distinct, check_writable, env_files
 
     # One thread: a small MLP gains nothing from more, and they would compete with the env's threads.
     # (Only SB3 models use torch; native models and baselines run without the sb3 extra.)
@@ -129,7 +135,7 @@ def load_agent(args: argparse.Namespace):
         overrides = {"goal": args.goal, "goal_distribution": None}
     if getattr(args, "robot", None) is not None:
         overrides = {**(overrides or {}), "robot": args.robot}
-    return load_agent(
+    agent = load_agent(
         args.source,
         joints=args.joints,
         preset=args.preset,
@@ -137,3 +143,12 @@ def load_agent(args: argparse.Namespace):
         task=getattr(args, "env", None) or "goal",
         env_from=getattr(args, "env_from", None),
     )
+    inputs = [*agent.files, *env_files(agent.env_kwargs)]
+    for folder in (args.source, getattr(args, "env_from", None)):
+        if folder is not None and os.path.isdir(folder):
+            # A run directory's own files (evaluations.csv, checkpoints, ...) are no place for outputs.
+            inputs += [p for p in Path(folder).rglob("*") if p.is_file()]
+    for path, what in outputs:
+        check_writable(path, what, inputs)
+    check_distinct(outputs)
+    return agent

@@ -27,9 +27,10 @@ def env_line(agent) -> str:
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from snakesim.agents.evaluation import evaluate
 
-    if args.json is not None and args.json != "-":
-        check_writable(args.json, "--json")
-    agent = load_agent(args)
+    outputs = [] if args.json in (None, "-") else [(args.json, "--json")]
+    for path, what in outputs:
+        check_writable(path, what)
+    agent = load_agent(args, outputs)
     result = evaluate(agent, args.episodes, args.seed, deterministic=not args.stochastic)
     report = {
         "model": agent.path,

@@ -9,12 +9,14 @@ from snakesim.cli.errors import UserError, check_writable
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from snakesim.runs.export import to_sb3
+    from snakesim.runs.export import to_sb3, vecnormalize_path
 
     out = check_writable(args.sb3, "--sb3")
     if out.suffix.lower() != ".zip":
         raise UserError(f"cannot write --sb3 {out}: expected a .zip file")
-    agent = load_agent(args)
+    # The observation statistics go beside the zip (when the policy has them).
+    outputs = [(out, "--sb3"), (vecnormalize_path(out), "--sb3's statistics")]
+    agent = load_agent(args, outputs)
     if agent.kind != "native":
         raise UserError(
             f"{agent.path} is already a Stable-Baselines3 model; export takes native runs and models"

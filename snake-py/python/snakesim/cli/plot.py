@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from snakesim.cli.errors import UserError, check_writable
 from snakesim.files import write_atomically
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
+    from snakesim.runs.rundir import CONFIG_FILE, EVALUATIONS_FILE
     from snakesim.viewer.plots import plot_runs
 
-    out = check_writable(args.out, "--out")
+    # What it reads: the runs' evaluations and configs (a figure's name cannot be theirs but by a link).
+    inputs = [p for run in map(Path, args.runs) for p in (run, run / EVALUATIONS_FILE, run / CONFIG_FILE)]
+    out = check_writable(args.out, "--out", inputs)
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UserError(f"cannot write --out {out}: expected a .png, .pdf or .svg file")
     drawn = write_atomically(

@@ -6,7 +6,7 @@ import argparse
 
 from snakesim.cli import rerun as rerun_cli
 from snakesim.cli.args import agent_options, baseline_env_options, int_at_least, load_agent, seconds
-from snakesim.cli.errors import UserError, check_writable
+from snakesim.cli.errors import UserError, check_distinct, check_writable
 from snakesim.files import write_atomically
 from snakesim.limits import LIMITS
 
@@ -19,11 +19,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
     rrd = rerun_cli.check_replay(args)
     outs = [check_writable(out, "--out") for out in args.out]
     kinds = [replay.check_output(out) for out in outs]
-    if len({out.resolve() for out in outs}) < len(outs):
-        raise UserError("two --out name the same file; give each its own path")
+    outputs = [(out, "--out") for out in outs] + ([(rrd, "--rrd")] if rrd is not None else [])
+    check_distinct(outputs)
     if any(kind != "figure" for kind in kinds):
         replay.check_fps(args.fps)
-    agent = load_agent(args)
+    agent = load_agent(args, outputs)
     # Rerun outputs record their episodes first; figures and animations then show the first of them.
     recorded = rerun_cli.replay(args, agent, rrd) if rerun_cli.wants_rerun(args) else None
     if recorded is not None:

@@ -81,7 +81,8 @@ def check_outputs(args: argparse.Namespace) -> Path | None:
 
     rrd = None
     if args.rrd is not None:
-        rrd = check_writable(args.rrd, "--rrd")
+        trace = getattr(args, "trace", None)  # convert's input
+        rrd = check_writable(args.rrd, "--rrd", [trace] if trace else [])
         if rrd.suffix.lower() != ".rrd":
             raise UserError(f"cannot write --rrd {rrd}: expected a .rrd file")
     if args.spawn:

@@ -47,7 +47,7 @@ from typing import Any
 
 from snakesim import _core
 from snakesim.envs.config import plain
-from snakesim.files import write_atomically
+from snakesim.files import FileError, read_text, write_atomically
 
 #: Every key with its default, from Rust.
 DEFAULTS: dict[str, Any] = json.loads(_core.run_config_defaults())
@@ -127,8 +127,9 @@ def load_yaml(path: str | os.PathLike) -> dict[str, Any]:
     raises ConfigError with the file's name."""
     name = os.fspath(path)
     try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
+        text = read_text(path, "config_bytes")
+    except FileError as error:
+        raise ConfigError(f"config file {error}") from None
     except FileNotFoundError:
         raise ConfigError(f"config file {name} does not exist") from None
     except IsADirectoryError:

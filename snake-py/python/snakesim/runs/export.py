@@ -4,7 +4,8 @@ The native network and SB3's ``MlpPolicy`` with snakesim's policy_kwargs are the
 same tensor names (see snake-rl's ``nn::network``), so the weights move over one to one. A policy that
 normalises observations also gets its statistics, as a ``VecNormalize`` pickle beside the zip
 (``<name>_vecnormalize.pkl``): load it with ``VecNormalize.load(path, venv)`` and normalise observations
-before ``predict``.
+before ``predict``. The env keywords go into the zip's ``data`` (``snakesim_env_kwargs``, plain JSON), so
+``snakesim evaluate NAME.zip`` runs the env the native model names.
 """
 
 from __future__ import annotations
@@ -17,12 +18,13 @@ import numpy as np
 
 from snakesim import extras
 from snakesim.files import write_atomically
+from snakesim.runs.rundir import EXPORTED_STATISTICS_SUFFIX
 
 
 def vecnormalize_path(zip_path: str | os.PathLike) -> Path:
     """Where the observation statistics of an exported model go."""
     path = Path(zip_path)
-    return path.with_name(f"{path.stem}_vecnormalize.pkl")
+    return path.with_name(path.stem + EXPORTED_STATISTICS_SUFFIX)
 
 
 def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
@@ -33,6 +35,7 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from snakesim.agents.loading import EXPORTED_ENV_KEY
     from snakesim.envs.sb3 import SnakeVecEnv
     from snakesim.runs.policies import policy_kwargs
 
@@ -70,6 +73,9 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
             state[alias] = torch.from_numpy(np.array(array, dtype=np.float32))
     model.policy.load_state_dict(state)
     model.num_timesteps = int(agent.num_timesteps or 0)
+    # The env it was trained in, as plain JSON in the zip's data (snakesim reads it back; PPO.load
+    # sets it as an attribute and ignores it), so the export evaluates on the native model's env.
+    setattr(model, EXPORTED_ENV_KEY, dict(agent.env_kwargs))
     out = Path(path)
     # SB3 appends ".zip" only to a name without a suffix; the temporary file ends in .zip.
     write_atomically(out, model.save)

@@ -19,6 +19,7 @@ so readers (evaluate, plot, replay) need no lock and never see half a file.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -28,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import _core
+from snakesim.files import open_regular
 
 EVAL_FIELDS = ("timesteps", "mean_return", "std_return", "success_rate", "mean_steps_to_goal", "wall_time")
 EVALUATIONS_FILE = "evaluations.csv"
@@ -39,6 +41,8 @@ TB_NAME = "PPO"
 MODEL_FILE = "model.zip"
 NATIVE_MODEL_FILE = "model.safetensors"
 VECNORMALIZE_FILE = "vecnormalize.pkl"
+#: ``snakesim export``'s statistics: ``NAME_vecnormalize.pkl`` beside ``NAME.zip``.
+EXPORTED_STATISTICS_SUFFIX = "_vecnormalize.pkl"
 CONFIG_FILE = "config.yaml"
 CHECKPOINT_DIR = "checkpoints"
 _CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
@@ -71,8 +75,9 @@ def csv_value(value: Any) -> str:
 
 
 def read_evaluations(path: str | os.PathLike) -> list[dict[str, float]]:
-    """Rows of an evaluations.csv as floats (``nan`` where no episode reached the goal)."""
-    with open(path, newline="", encoding="utf-8") as f:
+    """Rows of an evaluations.csv as floats (``nan`` where no episode reached the goal); ValueError
+    naming the file (and the line and column) for anything else, a non-finite number included."""
+    with open_regular(path, "csv_bytes") as raw, io.TextIOWrapper(raw, encoding="utf-8", newline="") as f:
         reader = csv.DictReader(f)
         if reader.fieldnames is None or not set(EVAL_FIELDS) <= set(reader.fieldnames):
             raise ValueError(
@@ -81,9 +86,17 @@ def read_evaluations(path: str | os.PathLike) -> list[dict[str, float]]:
         rows = []
         for row in reader:
             try:
-                rows.append({key: float(row[key]) for key in EVAL_FIELDS})
+                values = {key: float(row[key]) for key in EVAL_FIELDS}
             except (TypeError, ValueError):
                 raise ValueError(bad_row(path, reader.line_num, row.values())) from None
+            for key, value in values.items():
+                # Only the steps to goal may be nan: no episode of that evaluation reached it.
+                if not math.isfinite(value) and not (key == "mean_steps_to_goal" and math.isnan(value)):
+                    raise ValueError(
+                        f"{os.fspath(path)}: line {reader.line_num}, column {key}: {row[key][:20]!r} is not "
+                        "a finite number"
+                    )
+            rows.append(values)
         return rows
 
 

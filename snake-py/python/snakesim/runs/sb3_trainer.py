@@ -21,6 +21,7 @@ same start states, so successive points of a learning curve differ by the policy
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -33,8 +34,8 @@ from typing import Any
 
 from snakesim import _core, extras
 from snakesim.agents.evaluation import run_episodes, summarize
-from snakesim.agents.loading import AgentError, inspect_model
-from snakesim.files import write_atomically
+from snakesim.agents.loading import AgentError, inspect_model, load_normalizer, safe_custom_objects
+from snakesim.files import open_regular, read_text, write_atomically
 from snakesim.runs import config as runconfig
 from snakesim.runs import rundir
 from snakesim.runs.results import TrainingInterrupted, TrainResult, format_eval
@@ -208,7 +209,9 @@ class Trainer:
                 skipped.append(f"skipped a checkpoint: {error}")
                 continue
             try:
-                wall = float(json.loads(meta.read_text())["wall_time"]) if meta.is_file() else 0.0
+                wall = 0.0
+                if meta.is_file():
+                    wall = float(json.loads(read_text(meta, "config_bytes"))["wall_time"])
                 if not math.isfinite(wall) or wall < 0:
                     raise ValueError(f"wall_time {wall} is not a time")
             except (ValueError, TypeError, KeyError, OSError) as error:
@@ -236,7 +239,7 @@ class Trainer:
             versions_path = self.run_dir / VERSIONS_FILE
             versions = package_versions()
             if self.resume and versions_path.is_file():
-                recorded = json.loads(versions_path.read_text())
+                recorded = json.loads(read_text(versions_path, "config_bytes"))
                 current = {k: v for k, v in versions.items() if recorded.get(k) != v}
                 if current:
                     recorded.setdefault("resumed_with", []).append(
@@ -258,7 +261,7 @@ class Trainer:
         rows: list[list[str]] = []
         if self.resume and path.is_file():
             # Evaluations after the checkpoint we resume from (a crash after it) are redone: drop them.
-            with open(path, newline="", encoding="utf-8") as f:
+            with io.TextIOWrapper(open_regular(path, "csv_bytes"), encoding="utf-8", newline="") as f:
                 reader = csv.reader(f)
                 next(reader, None)
                 limit = self.resume_from[0] if self.resume_from else 0
@@ -301,17 +304,38 @@ class Trainer:
         if self.resume_from is not None:
             stats = rundir.checkpoint_paths(self.run_dir, self.resume_from[0])[1]
             if stats.is_file():
+                # VecNormalize.load, but unpickled through the allow-list of snakesim.agents.safe_pickle.
                 try:
-                    venv = VecNormalize.load(os.fspath(stats), venv)
-                except Exception as error:  # noqa: BLE001 - unpickling garbage fails in many ways
-                    raise RunDirError(
-                        f"cannot resume {self.run_dir}: {stats} is not a VecNormalize pickle "
-                        f"({type(error).__name__}: {error})"
-                    ) from None
-                venv.training = True
-                return venv
+                    normalizer = load_normalizer(stats)
+                except AgentError as error:
+                    raise RunDirError(f"cannot resume {self.run_dir}: {error}") from None
+                normalizer.set_venv(venv)
+                normalizer.training = True
+                return normalizer
             self.log(f"note: {stats} is missing; observation statistics start afresh")
         return VecNormalize(venv, gamma=self.config["ppo"]["gamma"])
+
+    def _unpickled(self, path: Path, venv) -> dict[str, Any]:
+        """What replaces the pickled entries of a checkpoint's ``data`` (SB3 would unpickle them, and a
+        pickle can run code): the same things, made from the configuration and the env."""
+        from stable_baselines3.common.policies import ActorCriticPolicy
+
+        from snakesim.runs.policies import policy_kwargs
+
+        ppo = self.config["ppo"]
+        known = {
+            "policy_class": ActorCriticPolicy,  # what "MlpPolicy" names
+            "policy_kwargs": policy_kwargs(self.config["arch"], log_std_init=self.config["log_std_init"]),
+            "observation_space": venv.observation_space,
+            "action_space": venv.action_space,
+            "learning_rate": runconfig.schedule(ppo["learning_rate"]),
+            "clip_range": runconfig.schedule(ppo["clip_range"]),
+            "clip_range_vf": runconfig.schedule(ppo["clip_range_vf"]),  # None stays None
+        }
+        try:
+            return safe_custom_objects(path, known)
+        except AgentError as error:
+            raise RunDirError(f"cannot resume {self.run_dir}: {error}") from None
 
     def _make_model(self, venv):
         from stable_baselines3 import PPO
@@ -323,7 +347,12 @@ class Trainer:
             steps, path = self.resume_from
             try:
                 model = PPO.load(
-                    path, env=venv, device=self.config["device"], tensorboard_log=tb, verbose=self.verbose
+                    path,
+                    env=venv,
+                    device=self.config["device"],
+                    custom_objects=self._unpickled(path, venv),
+                    tensorboard_log=tb,
+                    verbose=self.verbose,
                 )
             except Exception as error:  # noqa: BLE001 - a corrupt zip fails in torch or pickle in many ways
                 first = (str(error).strip().splitlines() or [""])[0]

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import _core
-from snakesim.files import write_atomically
+from snakesim.files import FileError, read_text, write_atomically
 from snakesim.limits import LIMITS
 from snakesim.runs import config as runconfig
 from snakesim.runs import rundir
@@ -283,13 +283,15 @@ def read_manifest(folder: str | os.PathLike) -> dict[str, Any]:
     if not path.is_file():
         raise SweepError(f"{folder} is not a sweep folder (no {MANIFEST_FILE})")
     try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
+        manifest = json.loads(read_text(path, "config_bytes"))
         if manifest.get("format") != MANIFEST_FORMAT:
             raise ValueError(f"format is not {MANIFEST_FORMAT}")
         if manifest.get("version") != MANIFEST_VERSION:
             raise ValueError(f"version {manifest.get('version')!r}, this snakesim reads {MANIFEST_VERSION}")
         manifest["trials"] = [Trial(**trial) for trial in manifest["trials"]]
-    except (ValueError, TypeError, KeyError, AttributeError, OSError) as error:
+    except FileError as error:
+        raise SweepError(str(error)) from None
+    except (ValueError, TypeError, KeyError, AttributeError, OSError, RecursionError) as error:
         raise SweepError(f"{path} is not a readable sweep plan: {error}") from None
     return manifest
 

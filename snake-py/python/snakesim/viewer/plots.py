@@ -60,8 +60,12 @@ def load_curve(source: str | os.PathLike) -> Curve:
         )
     try:
         rows = read_evaluations(csv_path)
-    except (ValueError, KeyError, OSError) as error:
-        raise PlotError(f"cannot read {csv_path}: {error}") from None
+    except UnicodeDecodeError:
+        raise PlotError(f"{csv_path} is not an evaluations.csv (not UTF-8 text)") from None
+    except ValueError as error:  # names the file (a FileError too)
+        raise PlotError(str(error)) from None
+    except OSError as error:
+        raise PlotError(f"cannot read {csv_path}: {error.strerror or error}") from None
     if not rows:
         raise PlotError(f"{csv_path} has no evaluations yet")
     config = None

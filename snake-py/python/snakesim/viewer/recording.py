@@ -25,18 +25,18 @@ Rerun stores positions and quaternions as float32 and scalars as float64.
 from __future__ import annotations
 
 import dataclasses
+import io
 import itertools
 import json
 import math
 import os
-import tempfile
 from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
-from pathlib import Path
+from contextlib import ExitStack, contextmanager
 from typing import Any
 
 import numpy as np
 
+from snakesim.files import FileError, open_regular, output_file
 from snakesim.limits import LIMITS
 
 #: Timelines of every recording.
@@ -446,12 +446,20 @@ def trace_columns(joints: int, parts: int | None = None) -> list[str]:
     return columns
 
 
+def _open_trace(path: str | os.PathLike) -> io.TextIOWrapper:
+    """A trace CSV opened as text: a regular file of at most LIMITS['csv_bytes']."""
+    return io.TextIOWrapper(open_regular(path, "csv_bytes"), encoding="utf-8")
+
+
 def read_trace_header(path: str | os.PathLike) -> tuple[dict[str, Any], list[str]]:
     """The metadata line and the column names of a physics-trace CSV; RecordingError if it is not one."""
     try:
-        with open(path, encoding="utf-8") as f:
-            first = f.readline()
-            header = f.readline().strip().split(",")
+        with _open_trace(path) as f:
+            # Bounded lines: a file without newlines is not read whole to find the first one.
+            first = f.readline(1 << 20)
+            header = f.readline(1 << 20).strip().split(",")
+    except FileError as error:
+        raise RecordingError(str(error)) from None
     except OSError as error:
         raise RecordingError(f"cannot read {path}: {error.strerror or error}") from None
     except UnicodeDecodeError:
@@ -490,7 +498,7 @@ def read_trace(path: str | os.PathLike, rows: int = 2400) -> tuple[dict[str, Any
     parts = int(meta.get("parts", n + 1))
 
     def blocks() -> Iterator[Trace]:
-        with open(path, encoding="utf-8") as f:
+        with _open_trace(path) as f:
             f.readline()
             f.readline()
             line = 2
@@ -564,37 +572,24 @@ def recording_to(
     application_id: str = "snakesim",
     name: str | None = None,
 ):
-    """A new recording stream whose data goes to the file ``rrd`` (written whole: a temporary file
-    renamed into place when the block ends without error) and/or a viewer at ``spawn_url``."""
+    """A new recording stream whose data goes to the file ``rrd`` (written whole, through
+    :func:`snakesim.files.output_file`, when the block ends without error) and/or a viewer at
+    ``spawn_url``."""
     rr = _rerun()
     rec = rr.RecordingStream(application_id)
-    sinks = []
-    tmp = None
-    if rrd is not None:
-        target = Path(rrd)
-        fd, tmp_name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".rrd")
-        os.close(fd)
-        tmp = Path(tmp_name)
-        sinks.append(rr.FileSink(tmp_name))
-    if spawn_url is not None:
-        sinks.append(rr.GrpcSink(spawn_url))
-    try:
-        if sinks:
-            rec.set_sinks(*sinks)
-        if name:
-            rec.send_recording_name(name)
-        yield rec
-        rec.flush()
-        rec.disconnect()
-        if tmp is not None:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)
-            os.replace(tmp, Path(rrd))
-            tmp = None
-    finally:
-        if tmp is not None:
-            try:
-                rec.disconnect()
-            finally:
-                tmp.unlink(missing_ok=True)
+    with ExitStack() as stack:
+        sinks = []
+        if rrd is not None:
+            sinks.append(rr.FileSink(stack.enter_context(output_file(rrd))))
+        if spawn_url is not None:
+            sinks.append(rr.GrpcSink(spawn_url))
+        try:
+            if sinks:
+                rec.set_sinks(*sinks)
+            if name:
+                rec.send_recording_name(name)
+            yield rec
+            rec.flush()
+        finally:
+            # Done with the file before it is put in place (or removed).
+            rec.disconnect()
