@@ -5,6 +5,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use crate::output::say;
+use crate::python::find_python;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::{
@@ -47,7 +48,7 @@ pub struct BenchArgs {
     pub world: Option<PathBuf>,
     /// Measure the cost of skin friction F,B,T on the built-in snake: runs with and without it,
     /// alternated, and the ratio of their step times (snakesim only).
-    #[arg(long, conflicts_with = "robot", value_parser = crate::run::parse_skin)]
+    #[arg(long, conflicts_with = "robot", value_parser = crate::flags::parse_skin)]
     pub skin_friction: Option<[f64; 3]>,
 }
 
@@ -87,19 +88,6 @@ fn one_run_in(
         snake.step()?;
     }
     Ok(steps as f64 / clock.elapsed().as_secs_f64())
-}
-
-/// A Python of the project: `explicit`, else $SNAKESIM_PYTHON, else .venv/bin/python here or in the repository.
-pub(crate) fn find_python(explicit: Option<&Path>) -> Option<PathBuf> {
-    if let Some(p) = explicit {
-        return Some(p.to_path_buf());
-    }
-    if let Some(p) = std::env::var_os("SNAKESIM_PYTHON") {
-        return Some(PathBuf::from(p));
-    }
-    let here = PathBuf::from(".venv/bin/python");
-    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv/bin/python");
-    [here, repo].into_iter().find(|p| p.exists())
 }
 
 /// Runs a pybullet benchmark script and reads the JSON it prints last (pybullet prints its own banner

@@ -3,8 +3,10 @@
 mod atlas;
 mod bench;
 mod env_run;
+mod flags;
 mod output;
 mod plot;
+mod python;
 mod recording;
 mod run;
 mod targets;

@@ -28,7 +28,7 @@ impl Converter {
     /// Finds `snakesim` ($SNAKESIM_PYTHON, .venv/bin/python here or in the repository, else the
     /// `snakesim` command on PATH) and checks that it can make recordings.
     pub fn find() -> Result<Self> {
-        let candidate = match crate::bench::find_python(None) {
+        let candidate = match crate::python::find_python(None) {
             Some(python) => Converter {
                 program: python,
                 prefix: vec!["-m".into(), "snakesim".into()],

@@ -5,6 +5,8 @@
 //! or a targets CSV) and what is written ([`Outputs`]). Everything is checked while the plan is made, so
 //! a bad flag or file fails before any simulation and before anything is written; [`execute`] then runs
 //! it.
+// The flags' doc comments are their --help text, where `<joint names>` is plain text, not HTML.
+#![allow(rustdoc::invalid_html_tags)]
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,6 +20,7 @@ use snake_core::{
 };
 use snake_core::{WorldRef, WorldSpec};
 
+use crate::flags::{parse_friction, parse_gait_param, parse_skin, parse_start};
 use crate::output::{check_distinct, say, OutputFile};
 use crate::plot::{self, PathPlot};
 use crate::recording::{self, Converter};
@@ -107,47 +110,6 @@ pub struct RunArgs {
     /// the `snakesim` command. A robot's boxes, spheres, cylinders and capsules are drawn as such.
     #[arg(long)]
     pub rrd: Option<PathBuf>,
-}
-
-fn parse_numbers<const N: usize>(text: &str, what: &str) -> Result<[f64; N], String> {
-    let values: Vec<f64> = text
-        .split(',')
-        .map(|v| v.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("'{text}' is not {what} ({N} numbers separated by commas)"))?;
-    values
-        .try_into()
-        .map_err(|v: Vec<f64>| format!("'{text}' has {} values; expected {what}", v.len()))
-}
-
-fn parse_gait_param(text: &str) -> Result<(String, f64), String> {
-    snake_core::gait::parse_param(text).map_err(|e| e.to_string())
-}
-
-fn parse_start(text: &str) -> Result<StartPose, String> {
-    let [x, y, z, yaw] = parse_numbers::<4>(text, "X,Y,Z,YAW")?;
-    let pose = StartPose { x, y, z, yaw };
-    pose.validate().map_err(|e| e.to_string())?;
-    Ok(pose)
-}
-
-fn parse_friction(text: &str) -> Result<[f64; 3], String> {
-    let a = parse_numbers::<3>(text, "X,Y,Z")?;
-    if a.iter().all(|v| v.is_finite() && *v >= 0.0) {
-        Ok(a)
-    } else {
-        Err(format!(
-            "'{text}': anisotropic friction must be finite and >= 0"
-        ))
-    }
-}
-
-pub(crate) fn parse_skin(text: &str) -> Result<[f64; 3], String> {
-    let [f, b, t] = parse_numbers::<3>(text, "F,B,T")?;
-    SkinFriction::new(f, b, t)
-        .validate(&format!("--skin-friction '{text}'"))
-        .map_err(|e| e.to_string())?;
-    Ok([f, b, t])
 }
 
 /// What is simulated.

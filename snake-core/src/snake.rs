@@ -134,7 +134,7 @@ impl Snake {
         )
     }
 
-    /// One physics step. Fails with [`Error::NonFinite`] if the base or a joint left the finite range.
+    /// One physics step. Fails with [`crate::Error::NonFinite`] if the base or a joint left the finite range.
     pub fn step(&mut self) -> Result<()> {
         self.world.step()?;
         self.steps += 1;

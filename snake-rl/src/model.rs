@@ -12,7 +12,7 @@
 //! | `obs_dim`, `act_dim` | observation and action lengths |
 //! | `joints`, `preset` | the snake |
 //! | `env` | the run's env keywords (JSON), as `snakesim.SnakeEnv` takes them |
-//! | `env_config` | the complete resolved env configuration (JSON); on loading, values the `env` keywords now resolve differently are pinned to it ([`pin_recorded_env`]) |
+//! | `env_config` | the complete resolved env configuration (JSON); on loading, values the `env` keywords now resolve differently are pinned to it (`pin_recorded_env`) |
 //! | `observation` | the observation layout (`paper`, `extended`, `terrain`) |
 //! | `action` | the action layout: `N joint targets in [-1, 1] x action_scale rad, head to tail` |
 //! | `normalize` | `true` when observations are normalised with `obs_rms` (clip 10, eps 1e-8) |

@@ -1,7 +1,7 @@
 //! The gait library: Tesch et al.'s compound serpenoid on the yaw and pitch joints of any robot.
 //!
 //! Every gait here is one formula of time `t` and module number `n` (see [`super::joints`]), the
-//! parameterised gait equation of Tesch et al. 2009 [1], which extends Hirose's serpenoid curve [2]
+//! parameterised gait equation of Tesch et al. 2009 \[1\], which extends Hirose's serpenoid curve \[2\]
 //! (the joint angles of a chain that follows a serpenoid curve are a sine of the joint index):
 //!
 //! ```text
@@ -23,7 +23,7 @@
 //!
 //! | gait | yaw wave | pitch wave | what moves the robot |
 //! |---|---|---|---|
-//! | `lateral` | travelling, `spatial_yaw` | small, twice the spatial and temporal frequency (`pitch_rate` 2), `phase` pi/2; none on a yaw-only robot | the serpenoid pushes against anisotropic friction (scales, wheels); on isotropic friction the vertical wave lifts the body at the curvature peaks, where it would slip sideways (the lifting of Hu et al. 2009 [3]) |
+//! | `lateral` | travelling, `spatial_yaw` | small, twice the spatial and temporal frequency (`pitch_rate` 2), `phase` pi/2; none on a yaw-only robot | the serpenoid pushes against anisotropic friction (scales, wheels); on isotropic friction the vertical wave lifts the body at the curvature peaks, where it would slip sideways (the lifting of Hu et al. 2009 \[3\]) |
 //! | `sidewind` | travelling | same amplitude and spatial frequency, `phase` pi/4 (Tesch et al.'s sidewinding) | the body lies down in two moving contact patches and is lifted in between: it moves across its own axis |
 //! | `roll` | `spatial` 0 (every module alike) | the same, `phase` pi/2 | the body is an arc whose bending plane turns about the body axis: it rolls sideways |
 //! | `linear` | none | travelling tail to head (`spatial_pitch` < 0) | a vertical travelling wave (linear progression / rectilinear-like): the body moves along its axis, head first |
@@ -32,11 +32,11 @@
 //! Steering (`--steer`, radians) adds to `offset_yaw`: an offset on every yaw joint bends the shape into
 //! an arc, which turns lateral undulation, linear progression and sidewinding (Tesch et al.'s `beta`).
 //!
-//! [1] M. Tesch, K. Lipkin, I. Brown, R. Hatton, A. Peck, J. Rembisz, H. Choset, "Parameterized and
+//! \[1\] M. Tesch, K. Lipkin, I. Brown, R. Hatton, A. Peck, J. Rembisz, H. Choset, "Parameterized and
 //! scripted gaits for modular snake robots", Advanced Robotics 23(9), 2009, 1131-1158.
-//! [2] S. Hirose, "Biologically Inspired Robots: Snake-Like Locomotors and Manipulators", Oxford
+//! \[2\] S. Hirose, "Biologically Inspired Robots: Snake-Like Locomotors and Manipulators", Oxford
 //! University Press, 1993.
-//! [3] D. L. Hu, J. Nirody, T. Scott, M. J. Shelley, "The mechanics of slithering locomotion", PNAS
+//! \[3\] D. L. Hu, J. Nirody, T. Scott, M. J. Shelley, "The mechanics of slithering locomotion", PNAS
 //! 106(25), 2009, 10081-10085.
 
 use std::f64::consts::PI;

@@ -4,7 +4,7 @@
 //! [`Serpenoid`] is a function of time, right for a gait run open loop; an agent changes the wave's
 //! steering, amplitude and frequency every env step, and a changed period in `sin(2 pi t / period)`
 //! would jump the phase. So this wave accumulates each wave's phase step by step instead (a changed
-//! frequency changes only how fast the phase runs), with the same equation ([`Serpenoid::shape`]).
+//! frequency changes only how fast the phase runs), with the same equation (`Serpenoid::shape`).
 //!
 //! What the three values set, each relative to the gait as the robot file names it (so that the
 //! middle of every action range, action 0, is that gait exactly):
