@@ -6,11 +6,8 @@ use crate::error::{invalid, Result};
 use crate::limits::MAX_SKIN_FRICTION;
 use crate::skin::{SkinAxis, SkinFriction};
 
-/// Most joints a snake may have. Bullet's cost per physics step grows much faster than the joints
-/// (the cube snake on this project's 2-core machine, release build: 64 joints ~3 ms a step, 128 ~40 ms,
-/// 256 ~1.3 s, 512 ~13 s): at 128 a run of `MAX_RUN_SECONDS` still ends within hours, at 512 it
-/// would take months.
-pub const MAX_JOINTS: usize = 128;
+/// Most joints a snake may have (defined with every other limit in [`crate::limits`]).
+pub use crate::limits::MAX_JOINTS;
 
 /// Every physical parameter of the simulated snake, with the paper's defaults.
 ///

@@ -57,7 +57,7 @@ pub(crate) fn invalid(message: impl Into<String>) -> Error {
 /// inside an XML attribute, a YAML key or a model's metadata, say) are written escaped, as Rust
 /// writes them. Every error of snake-core and snake-rl that quotes a user's input goes through it.
 ///
-/// The line is at most [`MAX_ERROR_CHARS`](crate::limits::MAX_ERROR_CHARS) characters: a longer one
+/// The line is at most [`MAX_ERROR_CHARS`] characters: a longer one
 /// (a 1 MB link name quoted) keeps its start and end with ` [...] ` between them.
 pub fn one_line(message: String) -> String {
     let message = if message.chars().any(char::is_control) {
@@ -77,9 +77,13 @@ pub fn one_line(message: String) -> String {
     capped(message)
 }
 
+/// Longest error message shown, characters: a message that quotes a user's value (a 1 MB link name)
+/// is cut in its middle to this length, keeping the start (the file and key) and the end (what was
+/// expected). Long enough for the longest list of allowed keys we print.
+pub const MAX_ERROR_CHARS: usize = 600;
+
 /// `message` cut in its middle to at most `MAX_ERROR_CHARS` characters.
 fn capped(message: String) -> String {
-    use crate::limits::MAX_ERROR_CHARS;
     let count = message.chars().count();
     if count <= MAX_ERROR_CHARS {
         return message;

@@ -35,6 +35,7 @@
 #![deny(missing_docs)]
 
 pub mod config;
+pub mod drawing;
 pub mod env;
 pub mod error;
 pub mod files;
@@ -61,9 +62,10 @@ pub use gait::{
     Gait, GaitChoice, GaitKind, JointRole, JointRoles, LateralUndulation, Serpenoid,
     SerpenoidParams,
 };
+pub use drawing::ShapeDrawing;
 pub use math::{quaternion_from_euler, StartPose};
 pub use robot::{
-    Robot, RobotFile, RobotGait, RobotRef, RobotSpec, RobotWave, ShapeDrawing, Simulation,
+    Robot, RobotFile, RobotGait, RobotRef, RobotSpec, RobotWave, Simulation,
     WaveFile, DEFAULT_WAVE_STEERING,
 };
 pub use skin::{SkinAxis, SkinFriction};

@@ -2,7 +2,11 @@
 //! value from giving silently non-finite numbers, physics that no longer resolves the snake, or a call
 //! that never returns; everything that checks a size, a range or a duration takes it from here.
 
-pub use crate::config::MAX_JOINTS;
+/// Most joints a snake may have. Bullet's cost per physics step grows much faster than the joints
+/// (the cube snake on this project's 2-core machine, release build: 64 joints ~3 ms a step, 128 ~40 ms,
+/// 256 ~1.3 s, 512 ~13 s): at 128 the longest run ([`MAX_RUN_SECONDS`], 864,000 steps) takes about
+/// 10 hours; at 512 it would take about 4 months.
+pub const MAX_JOINTS: usize = 128;
 
 /// Largest |x| or |y| of a start position or a goal, metres (10 km). Far inside what double-precision
 /// physics resolves (at 10 km a position is exact to ~2e-12 m, against cubes of 0.25 m; at 1e18 m the
@@ -152,10 +156,8 @@ pub const MAX_CONFIG_BYTES: u64 = 16 << 20;
 /// (1 GiB).
 pub const MAX_CSV_BYTES: u64 = 1 << 30;
 
-/// Longest error message shown, characters: a message that quotes a user's value (a 1 MB link name)
-/// is cut in its middle to this length, keeping the start (the file and key) and the end (what was
-/// expected). Long enough for the longest list of allowed keys we print.
-pub const MAX_ERROR_CHARS: usize = 600;
+/// Longest error message shown, characters (defined beside the errors, which every module uses).
+pub use crate::error::MAX_ERROR_CHARS;
 
 /// Deepest nesting of a YAML or XML file we read (flow brackets, block indentation levels or XML
 /// elements): far beyond any real robot, world or run file, and shallow enough that every file within

@@ -24,6 +24,7 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+use crate::drawing::ShapeDrawing;
 use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, GaitKind, JointRoles, LateralUndulation, Serpenoid};
 use crate::limits::MAX_URDF_BYTES;
@@ -618,17 +619,6 @@ impl Simulation for Robot {
     fn dt(&self) -> f64 {
         self.dt
     }
-}
-
-/// One collision shape as a viewer draws it, in its link's centre-of-mass frame.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ShapeDrawing {
-    /// box, sphere, cylinder or capsule (cylinders and capsules along their z axis).
-    pub kind: &'static str,
-    /// Box: full extents; sphere: radius, 0, 0; cylinder and capsule: radius, length, 0.
-    pub size: [f64; 3],
-    /// Centre and orientation: x, y, z, qx, qy, qz, qw.
-    pub pose: [f64; 7],
 }
 
 impl Robot {

@@ -963,7 +963,7 @@ pub struct WorldDrawing {
     pub ground: GroundDrawing,
     /// Each obstacle: box (full extents), sphere (radius, 0, 0) or cylinder (radius, height, 0), with
     /// its pose, as a robot's shapes are described.
-    pub obstacles: Vec<crate::robot::ShapeDrawing>,
+    pub obstacles: Vec<crate::drawing::ShapeDrawing>,
 }
 
 impl WorldSpec {
@@ -992,7 +992,7 @@ impl WorldSpec {
                 };
                 let [x, y, z] = o.position;
                 let [qx, qy, qz, qw] = o.orientation();
-                crate::robot::ShapeDrawing {
+                crate::drawing::ShapeDrawing {
                     kind,
                     size,
                     pose: [x, y, z, qx, qy, qz, qw],

@@ -91,3 +91,48 @@ def test_public_names_still_import():
         gymnasium.make(env_id).close()
     from snakesim import SnakeGoalEnv, SnakeVectorEnv, __version__  # noqa: F401
     from snakesim.agents import load_agent  # noqa: F401
+
+
+REPO = Path(__file__).resolve().parents[2]
+CRATES = ("bullet-sys", "snake-core", "snake-rl", "snake-cli", "snake-py")
+
+
+def crate_modules(src: Path) -> dict[str, str]:
+    """A crate's top-level modules (``src/world.rs``, ``src/env.rs`` with ``src/env/*.rs``) and their
+    source without comments."""
+    found: dict[str, str] = {}
+    for path in sorted(src.rglob("*.rs")):
+        parts = path.relative_to(src).with_suffix("").parts
+        if parts[0] in ("lib", "main") or parts[-1] == "mod" and len(parts) == 1:
+            continue
+        text = "\n".join(line.split("//")[0] for line in path.read_text(encoding="utf-8").splitlines())
+        found[parts[0]] = found.get(parts[0], "") + text
+    return found
+
+
+def test_no_import_circle_in_the_crates():
+    """Within each crate, modules point one way: a module that another names through ``crate::``
+    names none of those that lead back to it (counting every use, not only ``use`` lines)."""
+    import re
+
+    for crate in CRATES:
+        mods = crate_modules(REPO / crate / "src")
+        graph = {
+            name: {m for m in re.findall(r"crate::(\w+)", text) if m in mods and m != name}
+            | {
+                m
+                for group in re.findall(r"use crate::\{([^}]*)\}", text)
+                for m in re.findall(r"\w+", group)
+                if m in mods and m != name
+            }
+            for name, text in mods.items()
+        }
+        for start in graph:
+            seen, stack = set(), [(start, [start])]
+            while stack:
+                node, path = stack.pop()
+                for nxt in graph[node]:
+                    assert nxt != start, f"{crate}: import circle {' -> '.join([*path, nxt])}"
+                    if nxt not in seen:
+                        seen.add(nxt)
+                        stack.append((nxt, [*path, nxt]))
