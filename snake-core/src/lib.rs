@@ -51,6 +51,7 @@ pub mod world;
 pub mod world_file;
 
 pub use config::{Preset, SnakeConfig};
+pub use drawing::ShapeDrawing;
 pub use env::{
     route_distance, ActionConfig, ActionMode, Capsule, Craters, Disc, DistancePrecision, EnvConfig,
     GoalDistribution, Info, Layout, ObservationLayout, PegField, ResetOptions, RewardConfig,
@@ -62,11 +63,10 @@ pub use gait::{
     Gait, GaitChoice, GaitKind, JointRole, JointRoles, LateralUndulation, Serpenoid,
     SerpenoidParams,
 };
-pub use drawing::ShapeDrawing;
 pub use math::{quaternion_from_euler, StartPose};
 pub use robot::{
-    Robot, RobotFile, RobotGait, RobotRef, RobotSpec, RobotWave, Simulation,
-    WaveFile, DEFAULT_WAVE_STEERING,
+    Robot, RobotFile, RobotGait, RobotRef, RobotSpec, RobotWave, Simulation, WaveFile,
+    DEFAULT_WAVE_STEERING,
 };
 pub use skin::{SkinAxis, SkinFriction};
 pub use snake::Snake;
