@@ -96,3 +96,44 @@ def test_bad_num_envs():
         SnakeVecEnv(0, joints=2)
     with pytest.raises(ValueError, match="num_envs"):
         SnakeVectorEnv(-1, joints=2)
+
+
+@pytest.mark.parametrize(
+    "env_id", [snakesim.ENV_ID, snakesim.GOAL_ENV_ID, snakesim.PEGS_ENV_ID, snakesim.ROUGH_ENV_ID]
+)
+def test_make_vec_gives_the_native_vector_env_as_gymnasium_make_gives_envs(env_id):
+    """``gymnasium.make_vec`` (with the vector entry point, and by default) is the native vector env
+    with ``gymnasium.make``'s keywords: env i is ``gymnasium.make(ID, **kwargs)`` seeded ``s + i``, bit for
+    bit, and episodes end where make's TimeLimit ends them (the task's default, or max_episode_steps)."""
+    import gymnasium
+
+    m, joints, steps, limit = 3, 3, 12, 5
+    venv = gymnasium.make_vec(env_id, num_envs=m, vectorization_mode="vector_entry_point", joints=joints)
+    assert isinstance(venv, SnakeVectorEnv)
+    assert isinstance(gymnasium.make_vec(env_id, num_envs=2, joints=joints), SnakeVectorEnv)
+    singles = [gymnasium.make(env_id, joints=joints) for _ in range(m)]
+    assert venv.single_observation_space.shape == singles[0].observation_space.shape
+    assert venv.single_action_space.shape == singles[0].action_space.shape
+    obs, _ = venv.reset(seed=40)
+    for i, env in enumerate(singles):
+        assert obs[i].tobytes() == env.reset(seed=40 + i)[0].tobytes()
+    rng = np.random.default_rng(3)
+    for _ in range(steps):
+        actions = rng.uniform(-1, 1, (m, *venv.single_action_space.shape)).astype(np.float32)
+        obs, rewards, terminated, truncated, _ = venv.step(actions)
+        for i, env in enumerate(singles):
+            s_obs, s_reward, s_term, s_trunc, _ = env.step(actions[i])
+            assert (obs[i].tobytes(), rewards[i]) == (
+                s_obs.tobytes(),
+                np.float64(s_reward).astype(rewards.dtype),
+            )
+            assert (terminated[i], truncated[i]) == (s_term, s_trunc)
+    # A limit of make's: the vector env truncates at the same step.
+    short = gymnasium.make_vec(env_id, num_envs=1, joints=joints, max_episode_steps=limit)
+    short.reset(seed=1)
+    ends = [
+        short.step(np.zeros((1, *short.single_action_space.shape), np.float32))[3][0] for _ in range(limit)
+    ]
+    assert ends == [False] * (limit - 1) + [True]
+    with pytest.raises(ValueError, match="task is"):
+        gymnasium.make_vec(env_id, num_envs=1, task="nope")

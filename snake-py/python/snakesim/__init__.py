@@ -51,20 +51,22 @@ ROUGH_ENV_ID = "snakesim/SnakeRough-v0"
 
 def register_envs() -> None:
     """Registers ``snakesim/Snake-v0``, ``snakesim/SnakeGoal-v0``, ``snakesim/SnakePegs-v0`` and
-    ``snakesim/SnakeRough-v0`` with Gymnasium (done on import)."""
+    ``snakesim/SnakeRough-v0`` with Gymnasium (done on import); ``gymnasium.make_vec`` of each gives
+    the native :class:`SnakeVectorEnv` (Rust threads), with ``gymnasium.make``'s keywords."""
     # gymnasium.make wraps the env in a TimeLimit of the spec's max_episode_steps (the task's default),
     # or of T with gymnasium.make(..., max_episode_steps=T). That wrapper alone truncates: the env is
     # made with max_episode_steps=None (no limit of its own), so that T may also exceed the default.
-    for env_id, entry_point, defaults in (
-        (ENV_ID, "snakesim.envs.env:SnakeEnv", ENV_DEFAULTS),
-        (GOAL_ENV_ID, "snakesim.envs.env:SnakeGoalEnv", GOAL_ENV_DEFAULTS),
-        (PEGS_ENV_ID, "snakesim.envs.env:SnakePegsEnv", PEGS_ENV_DEFAULTS),
-        (ROUGH_ENV_ID, "snakesim.envs.env:SnakeRoughEnv", ROUGH_ENV_DEFAULTS),
+    for env_id, env_class, defaults in (
+        (ENV_ID, SnakeEnv, ENV_DEFAULTS),
+        (GOAL_ENV_ID, SnakeGoalEnv, GOAL_ENV_DEFAULTS),
+        (PEGS_ENV_ID, SnakePegsEnv, PEGS_ENV_DEFAULTS),
+        (ROUGH_ENV_ID, SnakeRoughEnv, ROUGH_ENV_DEFAULTS),
     ):
         if env_id not in gymnasium.registry:
             gymnasium.register(
                 id=env_id,
-                entry_point=entry_point,
+                entry_point=f"snakesim.envs.env:{env_class.__name__}",
+                vector_entry_point=f"snakesim.envs.vector:{env_class.task}_vector_env",
                 max_episode_steps=defaults["max_episode_steps"],
                 kwargs={"max_episode_steps": None},
             )

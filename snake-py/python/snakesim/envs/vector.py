@@ -11,7 +11,14 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from snakesim import _core
-from snakesim.envs.config import action_array, env_config
+from snakesim.envs.config import (
+    ENV_DEFAULTS,
+    GOAL_ENV_DEFAULTS,
+    PEGS_ENV_DEFAULTS,
+    ROUGH_ENV_DEFAULTS,
+    action_array,
+    env_config,
+)
 
 
 class SnakeVectorEnv(VectorEnv):
@@ -58,3 +65,34 @@ class SnakeVectorEnv(VectorEnv):
 
     def close_extras(self, **kwargs: Any) -> None:
         pass
+
+
+def _vector_env(
+    task: str, defaults: Mapping[str, Any], num_envs: int, kwargs: dict[str, Any]
+) -> SnakeVectorEnv:
+    """The native vector env of ``task`` for ``gymnasium.make_vec``, with ``gymnasium.make``'s keywords.
+    An episode ends where ``gymnasium.make``'s ``TimeLimit`` would end it: at ``max_episode_steps`` if
+    given (``None``, the registration's own keyword, means the task's default)."""
+    if kwargs.get("task", task) != task:
+        raise ValueError(f"this id's task is {task!r}, not {kwargs['task']!r}")
+    if kwargs.get("max_episode_steps") is None:
+        kwargs["max_episode_steps"] = defaults["max_episode_steps"]
+    return SnakeVectorEnv(num_envs, **{**kwargs, "task": task})
+
+
+# The registered ids' vector entry points (module-level functions, so that a spec pickles):
+# ``gymnasium.make_vec("snakesim/SnakeGoal-v0", 8)`` calls goal_vector_env(num_envs=8, ...).
+def paper_vector_env(num_envs: int = 16, **kwargs: Any) -> SnakeVectorEnv:
+    return _vector_env("paper", ENV_DEFAULTS, num_envs, kwargs)
+
+
+def goal_vector_env(num_envs: int = 16, **kwargs: Any) -> SnakeVectorEnv:
+    return _vector_env("goal", GOAL_ENV_DEFAULTS, num_envs, kwargs)
+
+
+def pegs_vector_env(num_envs: int = 16, **kwargs: Any) -> SnakeVectorEnv:
+    return _vector_env("pegs", PEGS_ENV_DEFAULTS, num_envs, kwargs)
+
+
+def rough_vector_env(num_envs: int = 16, **kwargs: Any) -> SnakeVectorEnv:
+    return _vector_env("rough", ROUGH_ENV_DEFAULTS, num_envs, kwargs)
