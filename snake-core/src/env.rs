@@ -3,9 +3,11 @@
 
 mod action;
 mod config;
+mod course;
 mod height_map;
 mod observation;
 mod reward;
+mod route;
 mod terrain;
 #[cfg(test)]
 mod tests;
@@ -17,7 +19,7 @@ use serde::{Deserialize, Serialize};
 
 pub use action::{
     ActionConfig, ActionMode, MAX_GAIT_AMPLITUDE, MAX_GAIT_FREQUENCY, MAX_GAIT_STEERING,
-    MAX_RESIDUAL_SCALE, STEER_RESIDUAL_GAIN,
+    MAX_RESIDUAL_SCALE, MAX_STEER_NEAR_GOAL, STEER_RESIDUAL_GAIN,
 };
 pub use config::{
     EnvConfig, GoalDistribution, ObservationLayout, StartDistribution, Task, MAX_GOAL_DISTANCE,
@@ -29,16 +31,14 @@ pub use height_map::{
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
-pub use terrain::{
-    route_distance, Capsule, Craters, Disc, Layout, PegField, Ridges, RoughGround, Segment,
-    TerrainDistribution,
-};
+pub use route::{route_distance, route_distance_around, Capsule, Disc, Footprint, Segment};
+pub use terrain::{Craters, Layout, PegField, Ridges, RoughGround, TerrainDistribution};
 pub use trace::PhysicsTrace;
 
 use crate::error::{invalid, Result};
 use crate::math::StartPose;
 use crate::robot::Simulation;
-use crate::world_file::{Ground, WorldSpec};
+use crate::world_file::WorldSpec;
 use crate::{Robot, Snake};
 use action::Driver;
 use observation::JointScratch;
@@ -215,7 +215,10 @@ enum Phase {
 ///
 /// ## Episode End
 ///
-/// - Termination: the distance to the goal falls below [`EnvConfig::goal_radius`] (1 m).
+/// - Termination: the distance to the goal falls below [`EnvConfig::goal_radius`] (1 m); or,
+///   unsuccessfully, with [`EnvConfig::terrain`]'s rough ground, the base leaves its square (beyond
+///   it the body falls off the world) or, with `terrain.rough.craters.terminate`, is over a crater's
+///   floor.
 /// - Truncation: the episode reaches [`EnvConfig::max_episode_steps`] env steps (5000, the
 ///   `TimeLimit` registered with `Snake-v0`). Both flags are true if both happen on the same step.
 ///
@@ -274,16 +277,9 @@ pub struct SnakeEnv {
     episode_world: Option<WorldSpec>,
     /// The current episode's ground, for the terrain observation's height map (the plane otherwise).
     ground: height_map::GroundProbe,
-    /// Half the extent along x and y of the rough ground that [`EnvConfig::terrain`] laid out: the
-    /// episode ends (terminated, unsuccessful) once the head is beyond it, falling off the world.
-    ground_edge: Option<(f64, f64)>,
-    /// Craters' floors that end the episode (terminated, unsuccessful) once the head is over one
-    /// (`terrain.rough.craters.terminate`).
-    end_floors: Vec<Disc>,
-    /// The craters the progress term measures its way around (`reward.progress_around_craters`).
-    route_around: Vec<Disc>,
-    /// The ridges it measures its way around (`reward.progress_around_ridges`).
-    route_around_ridges: Vec<Capsule>,
+    /// What the progress term measures its way around and where the episode ends, from the
+    /// terrain [`EnvConfig::terrain`] laid out (nothing without it).
+    course: course::Course,
     /// The distance the progress term measured after the latest step or reset.
     progress_distance: f64,
 }
@@ -329,10 +325,7 @@ impl SnakeEnv {
             trace: None,
             episode_world: None,
             ground: height_map::GroundProbe::Plane,
-            ground_edge: None,
-            end_floors: Vec::new(),
-            route_around: Vec::new(),
-            route_around_ridges: Vec::new(),
+            course: course::Course::default(),
             progress_distance: 0.0,
         })
     }
@@ -466,39 +459,13 @@ impl SnakeEnv {
         // Random terrain takes one more number, after the goal's (none without it).
         let mut start = start;
         self.episode_world = None;
-        self.end_floors.clear();
-        self.route_around.clear();
-        self.route_around_ridges.clear();
+        self.course = course::Course::default();
         let laid_out;
         if let Some(terrain) = &self.config.terrain {
             let rng = self.rng.get_or_insert_with(ChaCha12Rng::from_entropy);
             let seed = rng.gen::<u64>();
             let layout = terrain.layout(world, &start, goal, seed)?;
-            if let Some(c) = terrain.rough.as_ref().map(|r| r.craters) {
-                let widened = |by: f64| -> Vec<Disc> {
-                    let grow = |d: &Disc| Disc {
-                        radius: d.radius + by,
-                        ..*d
-                    };
-                    layout.craters.iter().map(grow).collect()
-                };
-                if c.terminate {
-                    self.end_floors = widened(-c.wall);
-                }
-                if self.config.reward.progress_around_craters {
-                    self.route_around = widened(c.clearance);
-                }
-            }
-            if let Some(r) = terrain.rough.as_ref().map(|r| r.ridges) {
-                if self.config.reward.progress_around_ridges {
-                    let radius = r.half_width() + r.clearance;
-                    self.route_around_ridges = layout
-                        .ridges
-                        .iter()
-                        .map(|&segment| Capsule { segment, radius })
-                        .collect();
-                }
-            }
+            self.course = course::Course::of(terrain, &self.config.reward, &layout);
             laid_out = layout.world;
             world = &laid_out;
             if terrain.rough.is_some() && options.start.is_none() {
@@ -506,10 +473,6 @@ impl SnakeEnv {
             }
         }
         let keep = self.config.terrain.is_some().then(|| world.clone());
-        self.ground_edge = match (&self.config.terrain, &world.ground) {
-            (Some(t), Ground::Heightfield(h)) if t.rough.is_some() => Some(h.half_extents()),
-            _ => None,
-        };
         self.ground = if self.config.observation == ObservationLayout::Terrain {
             height_map::GroundProbe::of(world)
         } else {
@@ -552,7 +515,9 @@ impl SnakeEnv {
             obs[1],
             self.config.reward.distance_precision,
         );
-        self.progress_distance = self.progress_distance_at(self.origin, self.distance);
+        self.progress_distance =
+            self.course
+                .progress_distance(self.origin, self.goal, self.distance);
         self.snake = Some(body);
         self.episode_world = keep;
         self.phase = Phase::Running;
@@ -596,7 +561,7 @@ impl SnakeEnv {
         let weights = self.config.reward;
         let distance = paper_distance(self.goal, obs[0], obs[1], weights.distance_precision);
         let success = distance < self.config.goal_radius;
-        let progress_distance = self.progress_distance_at(p, distance);
+        let progress_distance = self.course.progress_distance(p, self.goal, distance);
         let terms = RewardTerms::compute(
             &weights,
             &RewardInputs {
@@ -621,13 +586,10 @@ impl SnakeEnv {
         }
         self.episode_step += 1;
         self.episode_return += reward;
-        // Beyond the edge of the task's rough ground there is nothing: the body falls for the rest
-        // of the episode, which can no longer succeed (10 % of steer's episodes did so before).
-        let off_ground = self
-            .ground_edge
-            .is_some_and(|(hx, hy)| p.0.abs() > hx || p.1.abs() > hy);
-        let in_crater = self.end_floors.iter().any(|f| f.contains(p.0, p.1));
-        let terminated = success || off_ground || in_crater;
+        // The course ends the episode off the ground (beyond the rough ground's edge the body falls
+        // for the rest of it, which can no longer succeed: 10 % of steer's episodes did so before)
+        // and in its hazards.
+        let terminated = success || self.course.ends_at(p);
         let truncated = self.episode_step >= self.config.max_episode_steps;
         if terminated || truncated {
             self.phase = Phase::Done;
@@ -638,19 +600,6 @@ impl SnakeEnv {
             truncated,
             info: self.info(terms, success),
         })
-    }
-
-    /// The distance the progress term measures with the base at `p`: `straight`, the goal distance
-    /// there, unless it goes around craters or ridges.
-    fn progress_distance_at(&self, p: (f64, f64), straight: f64) -> f64 {
-        if self.route_around.is_empty() && self.route_around_ridges.is_empty() {
-            straight
-        } else {
-            self.route_around_ridges
-                .iter()
-                .map(|c| c.route_distance(p, self.goal))
-                .fold(route_distance(p, self.goal, &self.route_around), f64::max)
-        }
     }
 
     /// A step may run: an episode is running, `obs` has the observation's length and `action` one

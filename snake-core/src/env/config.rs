@@ -227,7 +227,7 @@ pub enum ObservationLayout {
     Extended,
     /// The extended layout (with the wave's phase where it has one) followed by the world's up
     /// (its z axis) in the head's frame (3: (0, 0, 1) upright, (0, 0, -1) upside down) and a height
-    /// map of the ground around the head ([`super::height_map`]): by default 25 heights relative to
+    /// map of the ground around the head ([`HeightMap`](super::HeightMap)): by default 25 heights relative to
     /// the head's z on a 5 x 5 grid, 0.75 m apart (`EnvConfig::height_map`); `2 + 2N + 6 + 3 + 25`
     /// in all. The goal, heading, velocity and map are in the rolled head frame
     /// (`observation::rolled_frame`: the heading of the body's long axis, left mirrored upside

@@ -872,6 +872,24 @@ fn one_crater_ahead(craters: Craters, progress_around_craters: bool) -> SnakeEnv
     })
 }
 
+/// `footprints`, each a disc.
+fn discs(footprints: &[Footprint]) -> Vec<Disc> {
+    let disc = |f: &Footprint| match *f {
+        Footprint::Disc(d) => d,
+        Footprint::Capsule(c) => panic!("a disc expected, got {c:?}"),
+    };
+    footprints.iter().map(disc).collect()
+}
+
+/// `footprints`, each a capsule.
+fn capsules(footprints: &[Footprint]) -> Vec<Capsule> {
+    let capsule = |f: &Footprint| match *f {
+        Footprint::Capsule(c) => c,
+        Footprint::Disc(d) => panic!("a capsule expected, got {d:?}"),
+    };
+    footprints.iter().map(capsule).collect()
+}
+
 #[test]
 fn a_crater_that_terminates_ends_the_episode_once_the_head_is_over_its_floor() {
     let run = |terminate: bool| {
@@ -880,7 +898,7 @@ fn a_crater_that_terminates_ends_the_episode_once_the_head_is_over_its_floor() {
             ..Craters::default()
         };
         let mut e = one_crater_ahead(craters, false);
-        let floors = e.end_floors.clone();
+        let floors = discs(&e.course.hazards);
         let mut heads = Vec::new();
         for _ in 0..600 {
             let s = e.step(&[0.0f32, 0.0, 0.0]).unwrap();
@@ -915,7 +933,7 @@ fn progress_around_craters_measures_the_way_around_them() {
     // straight distances.
     let mut e = one_crater_ahead(Craters::default(), true);
     let goal = CRATER_GOAL;
-    let crater = e.route_around.clone();
+    let crater = discs(&e.course.route_around);
     assert_eq!(crater.len(), 1);
     let origin = e.origin;
     let around = |p: (f64, f64)| crater[0].route_distance(p, goal);
@@ -947,7 +965,7 @@ fn progress_around_ridges_measures_the_way_around_them() {
         };
         config.reward.progress_around_ridges = true;
     });
-    let ridge = e.route_around_ridges.clone();
+    let ridge = capsules(&e.course.route_around);
     assert_eq!(ridge.len(), 1);
     // Across the line (along x), its middle on it, 3-10 m ahead; the footprint 0.75 m and the
     // clearance 1 m either side of its crest line.

@@ -20,9 +20,9 @@ pub struct PhysicsTrace {
     /// Number of joints N.
     pub joints: usize,
     /// Physics steps since the episode's world was built, after each recorded step (the reset's own
-    /// step is 1), as [`Snake::steps`].
+    /// step is 1), as [`Snake::steps`](crate::Snake::steps).
     pub steps: Vec<u64>,
-    /// Simulated seconds since the world was built, after each recorded step ([`Snake::time`]).
+    /// Simulated seconds since the world was built, after each recorded step ([`Snake::time`](crate::Snake::time)).
     pub times: Vec<f64>,
     /// Pose of every cube (every link of a robot), the head (base) first: x, y, z (metres), qx, qy,
     /// qz, qw.
