@@ -14,9 +14,21 @@ const INSTALL_HINT: &str =
      Install it with: sudo apt-get install libbullet-dev pkg-config\n\
      (bindgen also needs libclang: sudo apt-get install libclang-dev)";
 
+/// The shim's sources, by concern: the C API with the world and its bodies, URDF import, the skin-friction
+/// solver.
+const SOURCES: &[&str] = &[
+    "shim/snake_shim.cpp",
+    "shim/shim_urdf.cpp",
+    "shim/shim_skin.cpp",
+];
+
+/// The shim's headers: the FFI contract that bindgen reads, and what the sources share.
+const HEADERS: &[&str] = &["shim/snake_shim.h", "shim/shim_internal.h"];
+
 fn main() {
-    println!("cargo:rerun-if-changed=shim/snake_shim.h");
-    println!("cargo:rerun-if-changed=shim/snake_shim.cpp");
+    for path in HEADERS.iter().chain(SOURCES) {
+        println!("cargo:rerun-if-changed={path}");
+    }
     println!("cargo:rerun-if-env-changed=PKG_CONFIG_PATH");
 
     // Double precision is what pybullet is built with; the single-precision `bullet.pc` diverges.
@@ -45,7 +57,7 @@ fn main() {
         .cpp(true)
         // The shim is on the hot path of every step; optimise it even in debug builds.
         .opt_level(2)
-        .file("shim/snake_shim.cpp")
+        .files(SOURCES)
         .flag_if_supported("-std=c++14")
         // Bit-for-bit agreement with pybullet needs IEEE arithmetic in the exact order written:
         // no contraction into FMA, no fast-math.
