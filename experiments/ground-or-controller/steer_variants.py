@@ -15,6 +15,7 @@ import sys
 import numpy as np
 from snakesim.agents.baselines import goal_bearing
 from snakesim.agents.evaluation import run_episodes
+from snakesim.envs.env import make_env
 from win_overlap import print_counts  # this directory's script, on sys.path when run as a script
 
 #: (amplitude action, frequency action, steering gain): steer's own (0, 0, 1), and each changed.
@@ -34,11 +35,11 @@ VARIANTS = (
 NUDGED = tuple((0.0, 0.0, gain) for gain in (1.0, 1.001, 0.999, 1.002, 0.998))
 
 
-def steer(joints: int, amplitude: float, frequency: float, gain: float):
+def steer(structure: dict[str, int], amplitude: float, frequency: float, gain: float):
     def act(obs: np.ndarray) -> np.ndarray:
         obs = np.atleast_2d(obs)
         actions = np.zeros((obs.shape[0], 3), dtype=np.float32)
-        actions[:, 0] = np.clip(-gain * goal_bearing(obs, joints), -1.0, 1.0)
+        actions[:, 0] = np.clip(-gain * goal_bearing(obs, structure), -1.0, 1.0)
         actions[:, 1:] = amplitude, frequency
         return actions
 
@@ -54,11 +55,13 @@ def main() -> None:
     seed = int(args[1]) if len(args) > 1 else 1000
     task = args[2] if len(args) > 2 else "rough"
     joints = int(args[3]) if len(args) > 3 else 10
+    kwargs = {"task": task, "joints": joints, "observation": observation}
+    structure = make_env(**kwargs).observation_structure
     wins = []
     for amplitude, frequency, gain in variants:
         done = run_episodes(
-            steer(joints, amplitude, frequency, gain),
-            {"task": task, "joints": joints, "observation": observation},
+            steer(structure, amplitude, frequency, gain),
+            kwargs,
             episodes,
             seed,
         )

@@ -12,12 +12,14 @@ import sys
 import gymnasium
 import numpy as np
 import snakesim  # noqa: F401  (registers the envs)
+from snakesim.envs.config import observation_slice
 
 
-def bearing(obs: np.ndarray, joints: int, target: tuple[float, float]) -> float:
-    """Bearing of ``target`` from the head, radians (0 ahead, positive to the left)."""
-    x, y = float(obs[0]), float(obs[1])
-    s, c = float(obs[4 + 2 * joints]), float(obs[5 + 2 * joints])
+def bearing(obs: np.ndarray, structure: dict[str, int], target: tuple[float, float]) -> float:
+    """Bearing of ``target`` from the head, radians (0 ahead, positive to the left), for an
+    observation of ``structure`` (the env's ``observation_structure``)."""
+    x, y = obs[observation_slice(structure, "base_position")].tolist()
+    s, c = obs[observation_slice(structure, "heading")].tolist()
     vx, vy = target[0] - x, target[1] - y
     # The head frame: the goal vector's convention (ahead = -y, left = +x) at heading yaw.
     hx = c * vx + s * vy
@@ -31,6 +33,7 @@ def main() -> None:
     joints = int(sys.argv[3]) if len(sys.argv) > 3 else 10
     side = float(sys.argv[4]) if len(sys.argv) > 4 else 2.5
     env = gymnasium.make("snakesim/SnakePegs-v0", joints=joints)
+    structure = env.unwrapped.observation_structure
     wins = 0
     for k in range(episodes):
         obs, info = env.reset(seed=seed + k)
@@ -41,10 +44,11 @@ def main() -> None:
         done = False
         while not done:
             target = waypoints[0]
-            if len(waypoints) > 1 and math.hypot(target[0] - obs[0], target[1] - obs[1]) < 1.0:
+            x, y = obs[observation_slice(structure, "base_position")].tolist()
+            if len(waypoints) > 1 and math.hypot(target[0] - x, target[1] - y) < 1.0:
                 waypoints.pop(0)
                 target = waypoints[0]
-            steer = float(np.clip(-bearing(obs, joints, target), -1.0, 1.0))
+            steer = float(np.clip(-bearing(obs, structure, target), -1.0, 1.0))
             obs, _, terminated, truncated, info = env.step(np.array([steer, 0.0, 0.0], np.float32))
             done = terminated or truncated
         wins += bool(terminated)

@@ -16,24 +16,27 @@ from pathlib import Path
 import numpy as np
 from snakesim.agents.baselines import goal_bearing
 from snakesim.agents.evaluation import run_episodes, summarize
+from snakesim.envs.config import observation_slice
+from snakesim.envs.env import make_env
 from snakesim.runs import config as runconfig
 
 #: The crater attempt's run configuration, whose env this controller runs in.
 CONFIG = Path(__file__).resolve().parent / "rough-10-crater.yaml"
 
 
-def crater_steer(joints: int, drop: float):
-    """``act(obs_batch)`` for the terrain observation of a ``joints``-joint cube snake."""
-    start = 2 + 2 * joints + 6 + 2 + 3  # the height map follows the extended values, phase and up
+def crater_steer(structure: dict[str, int], drop: float):
+    """``act(obs_batch)`` for a terrain observation of ``structure`` (the env's
+    ``observation_structure``)."""
+    height_map = observation_slice(structure, "height_map")
+    side = int(round(structure["height_map"] ** 0.5))  # the map is a square grid
+    c = side // 2
 
     def act(obs: np.ndarray) -> np.ndarray:
         obs = np.atleast_2d(obs)
-        side = int(round((obs.shape[1] - start) ** 0.5))  # the map is the observation's square tail
-        c = side // 2
         actions = np.zeros((len(obs), 3), dtype=np.float32)
-        actions[:, 0] = np.clip(-goal_bearing(obs, joints), -1.0, 1.0)
+        actions[:, 0] = np.clip(-goal_bearing(obs, structure), -1.0, 1.0)
         # Rows 0..c-1 lie ahead (the head frame's -y), columns above c to the left.
-        ahead = obs[:, start : start + side * side].reshape(-1, side, side)[:, :c, :]
+        ahead = obs[:, height_map].reshape(-1, side, side)[:, :c, :]
         left, right = ahead[:, :, c + 1 :].min(axis=(1, 2)), ahead[:, :, :c].min(axis=(1, 2))
         blocked = ahead.min(axis=(1, 2)) < -drop
         # Positive steering bends towards the left: turn away from the deeper side.
@@ -51,7 +54,8 @@ def main() -> None:
     run = runconfig.load(Path(args[3]) if len(args) > 3 else CONFIG)
     joints = run["joints"]
     kwargs = {**run["env"], "joints": joints}
-    summary = summarize(run_episodes(crater_steer(joints, drop), kwargs, episodes, seed))
+    structure = make_env(**kwargs).observation_structure
+    summary = summarize(run_episodes(crater_steer(structure, drop), kwargs, episodes, seed))
     low, high = summary["success_rate_ci95"]
     print(f"crater_steer (drop {drop} m): success {summary['success_rate']:.2f} ({low:.2f}-{high:.2f})")
 

@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 from snakesim.agents.baselines import goal_bearing, plain_gait
 from snakesim.agents.evaluation import run_episodes, summarize
+from snakesim.envs.config import observation_slice
+from snakesim.envs.env import make_env
 from snakesim.runs import config as runconfig
 
 #: The ridge attempt's run configuration, whose env this controller runs in.
@@ -30,9 +32,12 @@ CONFIG = Path(__file__).resolve().parent / "rough-10-ridge.yaml"
 STEPS_PER_SECOND = 30
 
 
-def ridge_steer(joints: int, rise: float, hold: float):
-    """``act(obs_batch)`` for the terrain observation of a ``joints``-joint cube snake."""
-    start = 2 + 2 * joints + 6 + 2 + 3  # the height map follows the extended values, phase and up
+def ridge_steer(structure: dict[str, int], rise: float, hold: float):
+    """``act(obs_batch)`` for a terrain observation of ``structure`` (the env's
+    ``observation_structure``)."""
+    height_map = observation_slice(structure, "height_map")
+    n = int(round(structure["height_map"] ** 0.5))  # the map is a square grid
+    c = n // 2
     side: np.ndarray | None = None  # per env slot: the side it turns to (0: none chosen)
     holding: np.ndarray | None = None  # per env slot: steps left going straight
 
@@ -41,13 +46,11 @@ def ridge_steer(joints: int, rise: float, hold: float):
         obs = np.atleast_2d(obs)
         if side is None or len(side) != len(obs):
             side, holding = np.zeros(len(obs)), np.zeros(len(obs), dtype=int)
-        n = int(round((obs.shape[1] - start) ** 0.5))  # the map is the observation's square tail
-        c = n // 2
         # Rows 0..c-1 lie ahead (the head frame's -y), columns above c to the left.
-        ahead = obs[:, start : start + n * n].reshape(-1, n, n)[:, :c, :]
+        ahead = obs[:, height_map].reshape(-1, n, n)[:, :c, :]
         left, right = ahead[:, :, c + 1 :].max(axis=(1, 2)), ahead[:, :, :c].max(axis=(1, 2))
         blocked = ahead.max(axis=(1, 2)) > rise
-        steering = np.clip(-goal_bearing(obs, joints), -1.0, 1.0)
+        steering = np.clip(-goal_bearing(obs, structure), -1.0, 1.0)
         for i in range(len(obs)):
             if blocked[i]:
                 if side[i] == 0:
@@ -74,7 +77,8 @@ def main() -> None:
     run = runconfig.load(Path(args[4]) if len(args) > 4 else CONFIG)
     joints = run["joints"]
     kwargs = plain_gait({**run["env"], "joints": joints})
-    summary = summarize(run_episodes(ridge_steer(joints, rise, hold), kwargs, episodes, seed))
+    structure = make_env(**kwargs).observation_structure
+    summary = summarize(run_episodes(ridge_steer(structure, rise, hold), kwargs, episodes, seed))
     low, high = summary["success_rate_ci95"]
     rate = summary["success_rate"]
     print(f"ridge_steer (rise {rise} m, hold {hold} s): success {rate:.2f} ({low:.2f}-{high:.2f})")

@@ -15,7 +15,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use snake_core::urdf::Geometry;
 use snake_core::{
-    Gait, GaitChoice, GaitKind, InertiaSource, JointRoles, LateralUndulation, Preset, Robot,
+    Body, Gait, GaitChoice, GaitKind, InertiaSource, JointRoles, LateralUndulation, Preset, Robot,
     RobotGait, RobotSpec, Simulation, SkinAxis, SkinFriction, Snake, SnakeConfig, StartPose,
 };
 use snake_core::{WorldRef, WorldSpec};
@@ -152,10 +152,10 @@ impl BodyPlan {
         }
     }
 
-    fn build(&self, start: StartPose, world: &WorldSpec) -> Result<Built> {
+    fn build(&self, start: StartPose, world: &WorldSpec) -> Result<Body> {
         Ok(match self {
-            BodyPlan::Cubes { config, .. } => Built::Cubes(Snake::in_world(config, start, world)?),
-            BodyPlan::Robot(spec) => Built::Robot(Robot::in_world(spec, start, world)?),
+            BodyPlan::Cubes { config, .. } => Body::Cubes(Snake::in_world(config, start, world)?),
+            BodyPlan::Robot(spec) => Body::Robot(Robot::in_world(spec, start, world)?),
         })
     }
 
@@ -205,28 +205,6 @@ impl BodyPlan {
                     sizes.iter().sum::<f64>() / sizes.len() as f64
                 }
             }
-        }
-    }
-}
-
-/// The simulated body of a run.
-enum Built {
-    Cubes(Snake),
-    Robot(Robot),
-}
-
-impl Built {
-    fn sim(&self) -> &dyn Simulation {
-        match self {
-            Built::Cubes(s) => s,
-            Built::Robot(r) => r,
-        }
-    }
-
-    fn sim_mut(&mut self) -> &mut dyn Simulation {
-        match self {
-            Built::Cubes(s) => s,
-            Built::Robot(r) => r,
         }
     }
 }
@@ -411,7 +389,7 @@ impl RunPlan {
             .map_or_else(WorldSpec::default, |w| w.spec().clone())
     }
 
-    fn meta(&self, built: &Built) -> Result<serde_json::Value> {
+    fn meta(&self, built: &Body) -> Result<serde_json::Value> {
         let mut meta = self.body_meta(built)?;
         if let Some(w) = &self.world {
             meta["world"] = serde_json::json!({
@@ -422,7 +400,7 @@ impl RunPlan {
         Ok(meta)
     }
 
-    fn body_meta(&self, built: &Built) -> Result<serde_json::Value> {
+    fn body_meta(&self, built: &Body) -> Result<serde_json::Value> {
         let s = &self.start;
         Ok(match (&self.body, &self.drive) {
             (BodyPlan::Cubes { config, preset }, Drive::Gait(gait)) => serde_json::json!({
@@ -438,7 +416,7 @@ impl RunPlan {
                 "snake": config,
             }),
             (BodyPlan::Robot(spec), drive) => {
-                let Built::Robot(robot) = built else {
+                let Some(robot) = built.robot() else {
                     bail!("a robot plan builds a robot");
                 };
                 serde_json::json!({

@@ -22,7 +22,8 @@ pub use action::{
     MAX_RESIDUAL_SCALE, MAX_STEER_NEAR_GOAL, STEER_RESIDUAL_GAIN,
 };
 pub use config::{
-    EnvConfig, GoalDistribution, ObservationLayout, StartDistribution, Task, MAX_GOAL_DISTANCE,
+    EnvConfig, GoalDistribution, ObservationLayout, ObservationPart, ObservationStructure,
+    StartDistribution, Task, MAX_GOAL_DISTANCE,
 };
 pub use height_map::{
     HeightMap, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING, MAX_HEIGHT_MAP_SIDE,
@@ -39,32 +40,9 @@ use crate::error::{invalid, Result};
 use crate::math::StartPose;
 use crate::robot::Simulation;
 use crate::world_file::WorldSpec;
-use crate::{Robot, Snake};
+use crate::{Body, Robot, Snake};
 use action::Driver;
 use observation::JointScratch;
-
-/// The body of an episode.
-#[derive(Debug)]
-enum EnvBody {
-    Cubes(Snake),
-    Robot(Robot),
-}
-
-impl EnvBody {
-    fn sim(&self) -> &dyn Simulation {
-        match self {
-            EnvBody::Cubes(s) => s,
-            EnvBody::Robot(r) => r,
-        }
-    }
-
-    fn sim_mut(&mut self) -> &mut dyn Simulation {
-        match self {
-            EnvBody::Cubes(s) => s,
-            EnvBody::Robot(r) => r,
-        }
-    }
-}
 
 /// On random rough ground a drawn start is raised by the ground's highest point within this many
 /// metres of the origin.
@@ -170,6 +148,8 @@ enum Phase {
 /// ## Observation Space
 ///
 /// `Box(-inf, inf, (D,), float32)`. Every value is the simulator's double cast to `float32`.
+/// [`EnvConfig::observation_structure`] names its parts in order ([`ObservationPart`]: name and size,
+/// Gymnasium's `observation_structure`); the tables below are its index formulas.
 /// [`ObservationLayout::Paper`] (the default), `D = 2 + 2N`:
 ///
 /// | index      | observation                                      | unit    |
@@ -254,7 +234,7 @@ enum Phase {
 pub struct SnakeEnv {
     config: EnvConfig,
     rng: Option<ChaCha12Rng>,
-    snake: Option<EnvBody>,
+    snake: Option<Body>,
     phase: Phase,
     goal: (f64, f64),
     start: StartPose,
@@ -383,10 +363,7 @@ impl SnakeEnv {
     /// The current episode's snake and world (for rendering or extra measurements), if any and if it
     /// is the built-in snake.
     pub fn snake(&self) -> Option<&Snake> {
-        match self.snake.as_ref() {
-            Some(EnvBody::Cubes(s)) => Some(s),
-            _ => None,
-        }
+        self.snake.as_ref().and_then(Body::snake)
     }
 
     /// The current episode's world when [`EnvConfig::terrain`] laid one out at the latest reset
@@ -397,7 +374,7 @@ impl SnakeEnv {
 
     /// The current episode's body, the built-in snake or a robot, if any.
     pub fn simulation(&self) -> Option<&dyn Simulation> {
-        self.snake.as_ref().map(EnvBody::sim)
+        self.snake.as_ref().map(Body::sim)
     }
 
     /// Starts an episode and returns the first observation. See the type's documentation.
@@ -479,8 +456,8 @@ impl SnakeEnv {
             height_map::GroundProbe::Plane
         };
         let mut body = match &self.config.robot {
-            None => EnvBody::Cubes(Snake::in_world(&self.config.snake, start, world)?),
-            Some(robot) => EnvBody::Robot(Robot::in_world(robot.spec(), start, world)?),
+            None => Body::Cubes(Snake::in_world(&self.config.snake, start, world)?),
+            Some(robot) => Body::Robot(Robot::in_world(robot.spec(), start, world)?),
         };
         let snake = body.sim_mut();
         // The paper steps once before the first observation.
@@ -496,6 +473,7 @@ impl SnakeEnv {
         self.driver.reset();
         let base = observation::write(
             self.config.observation,
+            &self.config.observation_structure(),
             snake,
             self.goal,
             self.wave_phase(),
@@ -504,7 +482,7 @@ impl SnakeEnv {
             obs,
         )?;
         finite_output(obs, 0.0, 0.0)?;
-        self.driver.observe(obs, self.joints.positions.len());
+        self.driver.observe(obs);
         self.origin = (base.pose.position.x, base.pose.position.y);
         self.position = self.origin;
         self.work = 0.0;
@@ -639,7 +617,7 @@ impl SnakeEnv {
     /// before each or before the first) and the observation after it; returns the base's state and
     /// the motors' mechanical work (J) over the step.
     fn simulate(&mut self, obs: &mut [f32]) -> Result<(observation::BaseState, f64)> {
-        let Some(snake) = self.snake.as_mut().map(EnvBody::sim_mut) else {
+        let Some(snake) = self.snake.as_mut().map(Body::sim_mut) else {
             return Err(invalid(
                 "step() needs reset() first (no episode is running)",
             ));
@@ -677,6 +655,7 @@ impl SnakeEnv {
         let phase = per_physics_step.then(|| driver.wave_phase());
         let base = observation::write(
             self.config.observation,
+            &self.config.observation_structure(),
             snake,
             self.goal,
             phase.filter(|_| self.config.observes_wave_phase()),
@@ -684,7 +663,7 @@ impl SnakeEnv {
             &mut self.joints,
             obs,
         )?;
-        driver.observe(obs, self.joints.positions.len());
+        driver.observe(obs);
         Ok((base, work))
     }
 

@@ -8,6 +8,7 @@
 //! - [`config`]: [`SnakeConfig`], every physical parameter, and the [`Preset`]s `paper` (every cube
 //!   0.06 kg) and `snakebot-gym` (the paper's code: links 1.0 kg).
 //! - [`snake`]: [`Snake`], the robot on its ground plane.
+//! - [`body`]: [`Body`], the simulated body of a run or an episode: the snake or a URDF robot.
 //! - [`gait`]: the [`Gait`] trait, [`LateralUndulation`] (pybullet's snake.py wave) and the gait
 //!   library ([`Serpenoid`]: lateral undulation, sidewinding, rolling, linear progression, turning).
 //! - [`env`](mod@env): [`SnakeEnv`], the paper's reinforcement-learning environment (Gymnasium-style
@@ -34,6 +35,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod body;
 pub mod config;
 pub mod drawing;
 pub mod env;
@@ -50,13 +52,15 @@ pub mod vec_env;
 pub mod world;
 pub mod world_file;
 
+pub use body::Body;
 pub use config::{Preset, SnakeConfig};
 pub use drawing::ShapeDrawing;
 pub use env::{
     route_distance, ActionConfig, ActionMode, Capsule, Craters, Disc, DistancePrecision, EnvConfig,
-    GoalDistribution, Info, Layout, ObservationLayout, PegField, ResetOptions, RewardConfig,
-    RewardTerms, Ridges, RoughGround, Segment, SnakeEnv, StartDistribution, StepOutcome,
-    StepResult, Task, TerrainDistribution, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING,
+    GoalDistribution, Info, Layout, ObservationLayout, ObservationPart, ObservationStructure,
+    PegField, ResetOptions, RewardConfig, RewardTerms, Ridges, RoughGround, Segment, SnakeEnv,
+    StartDistribution, StepOutcome, StepResult, Task, TerrainDistribution, HEIGHT_MAP_LEN,
+    HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING,
 };
 pub use error::{Error, Result};
 pub use gait::{

@@ -7,7 +7,7 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUnty
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use snake_core::env::{EnvConfig, Info, ResetOptions, SnakeEnv};
+use snake_core::env::{EnvConfig, Info, ObservationStructure, ResetOptions, SnakeEnv};
 use snake_core::{StartPose, StepBuffers, VecSnakeEnv};
 
 mod evaluation;
@@ -99,6 +99,16 @@ type StepTuple<'py> = (
     Bound<'py, PyDict>,
 );
 
+/// Gymnasium's `observation_structure` (as in Swimmer-v5): the observation's part names and sizes, in
+/// order, as a dict (Python's keeps the order) from the configuration's one description.
+fn structure_dict(py: Python<'_>, structure: ObservationStructure) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    for (name, size) in structure.named() {
+        d.set_item(name, size)?;
+    }
+    Ok(d)
+}
+
 /// One snake environment (see `snakesim.SnakeEnv`).
 #[pyclass(module = "snakesim._core")]
 struct Env {
@@ -166,6 +176,14 @@ impl Env {
     #[getter]
     fn observation_dim(&self, py: Python<'_>) -> usize {
         self.with(py, |e| e.observation_dim())
+    }
+
+    /// The observation's named parts and their sizes, in order (Gymnasium's
+    /// `observation_structure`); they sum to `observation_dim`.
+    #[getter]
+    fn observation_structure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let structure = self.with(py, |e| e.config().observation_structure());
+        structure_dict(py, structure)
     }
 
     /// The goal of the current episode.
@@ -333,6 +351,13 @@ impl VecEnv {
     #[getter]
     fn observation_dim(&self, py: Python<'_>) -> usize {
         self.with(py, |e| e.observation_dim())
+    }
+
+    /// Each env's observation structure (see `Env.observation_structure`).
+    #[getter]
+    fn observation_structure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let structure = self.with(py, |e| e.config().observation_structure());
+        structure_dict(py, structure)
     }
 
     /// reset(seed) -> obs of shape (num_envs, observation_dim); env i is seeded with seed + i.

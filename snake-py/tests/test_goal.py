@@ -194,11 +194,12 @@ def test_evaluation_lists_the_episodes_in_their_own_order():
     from snakesim.agents.evaluation import run_episodes
 
     joints, episodes, seed, envs = 5, 20, 77, 16
+    structure = gymnasium.make("snakesim/SnakeGoal-v0", joints=joints).unwrapped.observation_structure
 
     def steer(obs: np.ndarray) -> np.ndarray:
         obs = np.atleast_2d(obs)
         actions = np.zeros((len(obs), 3), dtype=np.float32)
-        actions[:, 0] = np.clip(-goal_bearing(obs, joints), -1.0, 1.0)
+        actions[:, 0] = np.clip(-goal_bearing(obs, structure), -1.0, 1.0)
         return actions
 
     kwargs = {"task": "goal", "joints": joints}

@@ -166,18 +166,18 @@ impl ActionConfig {
     }
 }
 
-/// `baseline:steer`'s steering action for an extended or terrain observation `obs` of a body of
-/// `joints` joints: `clip(-atan2(gx, -gy), -1, 1)` of the goal vector (gx, gy) in the head frame
-/// (its -y ahead, +x to the left), in `float32` as the Python baseline computes it from the same
-/// values (`snakesim.agents.baselines`), so that a zero correction drives it step for step.
-pub(crate) fn goal_steering(obs: &[f32], joints: usize) -> f64 {
-    let (gx, gy) = goal_vector(obs, joints);
+/// `baseline:steer`'s steering action for the goal vector (gx, gy) of an extended or terrain
+/// observation (its `goal_vector` part, [`goal_vector`]): `clip(-atan2(gx, -gy), -1, 1)` in the head
+/// frame (its -y ahead, +x to the left), in `float32` as the Python baseline computes it from the
+/// same values (`snakesim.agents.baselines`), so that a zero correction drives it step for step.
+pub(crate) fn goal_steering((gx, gy): (f32, f32)) -> f64 {
     f64::from((-gx.atan2(-gy)).clamp(-1.0, 1.0))
 }
 
-/// The goal vector (gx, gy) of an extended or terrain observation, metres in the head frame.
-fn goal_vector(obs: &[f32], joints: usize) -> (f32, f32) {
-    (obs[2 + 2 * joints], obs[3 + 2 * joints])
+/// The goal vector (gx, gy) of an observation whose `goal_vector` part starts at `at`, metres in
+/// the head frame.
+fn goal_vector(obs: &[f32], at: usize) -> (f32, f32) {
+    (obs[at], obs[at + 1])
 }
 
 /// `low + (high - low) * (a + 1) / 2` for `a` in [-1, 1].
@@ -236,6 +236,8 @@ pub(crate) struct Driver {
     goal_steering: f64,
     /// With `steer_near_goal`: whether the last observation's goal lies within it.
     near_goal: bool,
+    /// Where the observation's `goal_vector` part starts (`None` in the paper layout, which lacks it).
+    goal_at: Option<usize>,
 }
 
 impl Driver {
@@ -267,6 +269,9 @@ impl Driver {
             action: Vec::with_capacity(config.action_dim()),
             goal_steering: 0.0,
             near_goal: false,
+            goal_at: config
+                .observation_structure()
+                .offset(super::ObservationPart::GoalVector),
         }
     }
 
@@ -277,15 +282,16 @@ impl Driver {
     }
 
     /// With `steer_residual` or `steer_near_goal`, what `baseline:steer` would steer for the
-    /// observation just written (`obs`, of an extended or terrain layout of a body of `joints`
-    /// joints) and whether its goal is near; a no-op otherwise.
-    pub fn observe(&mut self, obs: &[f32], joints: usize) {
+    /// observation just written (`obs`, of an extended or terrain layout) and whether its goal is
+    /// near; a no-op otherwise.
+    pub fn observe(&mut self, obs: &[f32]) {
         let near = self.config.steer_near_goal;
+        let Some(at) = self.goal_at else { return };
         if self.config.steer_residual || near > 0.0 {
-            self.goal_steering = goal_steering(obs, joints);
+            self.goal_steering = goal_steering(goal_vector(obs, at));
         }
         if near > 0.0 {
-            let (gx, gy) = goal_vector(obs, joints);
+            let (gx, gy) = goal_vector(obs, at);
             self.near_goal = f64::from(gx).hypot(f64::from(gy)) < near;
         }
     }

@@ -238,13 +238,38 @@ pub enum ObservationLayout {
 
 impl ObservationLayout {
     /// Length of the observation for a snake of `joints` joints with a height map of `map_len`
-    /// values (the terrain layout's).
+    /// values (the terrain layout's), without the wave's phase: the sum of its
+    /// [`structure`](Self::structure)'s sizes.
     pub fn dim(self, joints: usize, map_len: usize) -> usize {
-        match self {
-            ObservationLayout::Paper => 2 + 2 * joints,
-            ObservationLayout::Extended => 2 + 2 * joints + 6,
-            ObservationLayout::Terrain => 2 + 2 * joints + 6 + 3 + map_len,
+        self.structure(joints, false, map_len).len()
+    }
+
+    /// The named parts of the observation, in order, for a snake of `joints` joints, with the
+    /// wave's phase (`wave_phase`, which only the extended and terrain layouts hold) and a height
+    /// map of `map_len` values (the terrain layout's): the one description that the observation's
+    /// length, the code that writes it and every reader derive from.
+    pub fn structure(
+        self,
+        joints: usize,
+        wave_phase: bool,
+        map_len: usize,
+    ) -> ObservationStructure {
+        let mut s = ObservationStructure::default();
+        s.push(ObservationPart::BasePosition, 2);
+        s.push(ObservationPart::JointStates, 2 * joints);
+        if self.is_extended() {
+            s.push(ObservationPart::GoalVector, 2);
+            s.push(ObservationPart::Heading, 2);
+            s.push(ObservationPart::BaseVelocity, 2);
+            if wave_phase {
+                s.push(ObservationPart::WavePhase, 2);
+            }
         }
+        if self == ObservationLayout::Terrain {
+            s.push(ObservationPart::WorldUp, 3);
+            s.push(ObservationPart::HeightMap, map_len);
+        }
+        s
     }
 
     /// Whether the layout holds the extended layout's six values (goal, heading, velocity).
@@ -283,6 +308,130 @@ impl std::str::FromStr for ObservationLayout {
                     names.join(", ")
                 ))
             })
+    }
+}
+
+/// A named part of the observation vector (Gymnasium's `observation_structure`, as in Swimmer-v5:
+/// name -> size, in order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ObservationPart {
+    /// x and y of the base (head cube) centre in the world, m.
+    BasePosition,
+    /// Per joint from the head (joint 0) to the tail, its angle (rad) and angular velocity (rad/s),
+    /// interleaved: `angle_0, velocity_0, angle_1, ...` (2N values).
+    JointStates,
+    /// The goal minus the base position in the head frame (x, y), m.
+    GoalVector,
+    /// Sine and cosine of the head frame's heading (its rotation about world z).
+    Heading,
+    /// The base's planar linear velocity in the head frame (x, y), m/s.
+    BaseVelocity,
+    /// Sine and cosine of the wave's phase at the head (a wave action mode's extended or terrain
+    /// observation).
+    WavePhase,
+    /// The world's up (its z axis) in the head's own frame (x, y, z): (0, 0, 1) upright.
+    WorldUp,
+    /// Ground heights relative to the head's z on the height map's grid, m (row-major, see
+    /// [`HeightMap`]).
+    HeightMap,
+}
+
+impl ObservationPart {
+    /// Every part, in the order an observation holds those it has.
+    pub const ALL: [ObservationPart; 8] = [
+        ObservationPart::BasePosition,
+        ObservationPart::JointStates,
+        ObservationPart::GoalVector,
+        ObservationPart::Heading,
+        ObservationPart::BaseVelocity,
+        ObservationPart::WavePhase,
+        ObservationPart::WorldUp,
+        ObservationPart::HeightMap,
+    ];
+
+    /// The part's name in `observation_structure`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ObservationPart::BasePosition => "base_position",
+            ObservationPart::JointStates => "joint_states",
+            ObservationPart::GoalVector => "goal_vector",
+            ObservationPart::Heading => "heading",
+            ObservationPart::BaseVelocity => "base_velocity",
+            ObservationPart::WavePhase => "wave_phase",
+            ObservationPart::WorldUp => "world_up",
+            ObservationPart::HeightMap => "height_map",
+        }
+    }
+
+    /// The part named `name`, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+}
+
+/// The observation's named parts and their sizes, in order ([`ObservationLayout::structure`]); the
+/// observation's length is the sum of the sizes. Fixed-size and `Copy`: reading it allocates nothing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ObservationStructure {
+    parts: [(ObservationPart, usize); ObservationPart::ALL.len()],
+    count: usize,
+}
+
+impl Default for ObservationStructure {
+    fn default() -> Self {
+        ObservationStructure {
+            parts: [(ObservationPart::BasePosition, 0); ObservationPart::ALL.len()],
+            count: 0,
+        }
+    }
+}
+
+impl ObservationStructure {
+    fn push(&mut self, part: ObservationPart, size: usize) {
+        self.parts[self.count] = (part, size);
+        self.count += 1;
+    }
+
+    /// The parts and their sizes, in order.
+    pub fn parts(&self) -> &[(ObservationPart, usize)] {
+        &self.parts[..self.count]
+    }
+
+    /// The parts' names and sizes, in order (Gymnasium's `observation_structure`).
+    pub fn named(&self) -> impl Iterator<Item = (&'static str, usize)> + '_ {
+        self.parts().iter().map(|&(p, n)| (p.name(), n))
+    }
+
+    /// Length of the observation: the sum of the parts' sizes.
+    pub fn len(&self) -> usize {
+        self.parts().iter().map(|&(_, n)| n).sum()
+    }
+
+    /// Whether the observation has no value (never: the base position is always there).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The indices of `part` in the observation, or `None` where the observation lacks it.
+    pub fn range(&self, part: ObservationPart) -> Option<std::ops::Range<usize>> {
+        let mut at = 0;
+        for &(p, n) in self.parts() {
+            if p == part {
+                return Some(at..at + n);
+            }
+            at += n;
+        }
+        None
+    }
+
+    /// The first index of `part`, or `None` where the observation lacks it.
+    pub fn offset(&self, part: ObservationPart) -> Option<usize> {
+        self.range(part).map(|r| r.start)
+    }
+
+    /// The indices of the part named `name`, or `None` where there is no such part here.
+    pub fn range_of(&self, name: &str) -> Option<std::ops::Range<usize>> {
+        ObservationPart::from_name(name).and_then(|p| self.range(p))
     }
 }
 
@@ -434,8 +583,17 @@ impl EnvConfig {
     /// Length of the observation vector: the layout's, plus the wave's phase (sin, cos) when the
     /// extended layout meets a wave action mode.
     pub fn observation_dim(&self) -> usize {
-        self.observation.dim(self.joints(), self.height_map.len())
-            + 2 * usize::from(self.observes_wave_phase())
+        self.observation_structure().len()
+    }
+
+    /// The observation's named parts and their sizes, in order
+    /// ([`ObservationLayout::structure`] of this configuration's joints, wave phase and height map).
+    pub fn observation_structure(&self) -> ObservationStructure {
+        self.observation.structure(
+            self.joints(),
+            self.observes_wave_phase(),
+            self.height_map.len(),
+        )
     }
 
     /// Whether the observation ends with the sine and cosine of the wave's phase at the head.

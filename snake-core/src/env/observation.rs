@@ -1,6 +1,6 @@
 //! Writing the observation vector.
 
-use super::config::ObservationLayout;
+use super::config::{ObservationLayout, ObservationPart, ObservationStructure};
 use super::height_map::{GroundProbe, HeightMap};
 use crate::error::Result;
 use crate::robot::Simulation;
@@ -49,13 +49,17 @@ impl JointScratch {
     }
 }
 
-/// Fills `obs` (of the layout's length, plus 2 with a wave phase) from the snake's current state and,
-/// for the terrain layout, from `ground` sampled at the grid `map`; returns the base state.
+/// Fills `obs` (of `structure`'s length) part by part, in `structure`'s order, from the snake's
+/// current state and, for the terrain layout, from `ground` sampled at the grid `map`; returns the
+/// base state. `layout` picks the head frame (the rolled one for the terrain layout); the wave's
+/// part is written where `wave_phase` is given.
 ///
 /// Every value is the simulator's double cast to `float32` (round to nearest), as the paper's
 /// `np.array(...).astype(np.float32)` does.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn write(
     layout: ObservationLayout,
+    structure: &ObservationStructure,
     snake: &dyn Simulation,
     goal: (f64, f64),
     wave_phase: Option<f64>,
@@ -66,47 +70,55 @@ pub(crate) fn write(
     let base = snake.base_state()?;
     snake.read_joints(&mut scratch.positions, &mut scratch.velocities)?;
     let p = base.pose.position;
-    obs[0] = p.x as f32;
-    obs[1] = p.y as f32;
-    let n = scratch.positions.len();
-    for j in 0..n {
-        obs[2 + 2 * j] = scratch.positions[j] as f32;
-        obs[3 + 2 * j] = scratch.velocities[j] as f32;
-    }
-    if layout.is_extended() {
-        let (yaw, mirror) = if layout == ObservationLayout::Terrain {
-            rolled_frame(&base)
-        } else {
-            (heading(&base), 1.0)
-        };
-        let (s, c) = yaw.sin_cos();
-        // World vectors into the head frame: rotation by -yaw about z, left mirrored upside down.
-        let to_head = |vx: f64, vy: f64| (mirror * (c * vx + s * vy), -s * vx + c * vy);
-        let (gx, gy) = to_head(goal.0 - p.x, goal.1 - p.y);
-        let v = base.linear_velocity;
-        let (vx, vy) = to_head(v.x, v.y);
-        let extra = &mut obs[2 + 2 * n..2 + 2 * n + 6];
-        extra.copy_from_slice(&[
-            gx as f32, gy as f32, s as f32, c as f32, vx as f32, vy as f32,
-        ]);
-        if let Some(phase) = wave_phase {
-            let (s, c) = phase.sin_cos();
-            obs[2 + 2 * n + 6] = s as f32;
-            obs[2 + 2 * n + 7] = c as f32;
-        }
-        if layout == ObservationLayout::Terrain {
-            // After the wave's phase where there is one: the world's up in the head's own frame
-            // (not mirrored), then the map. The cube snake's joints all turn about its z axis, so the
-            // head's up is the whole body's: on hills it rolls over.
-            let at = obs.len() - map.len();
-            let up = base
-                .pose
-                .orientation
-                .inverse_transform_vector(&nalgebra::Vector3::z());
-            for (o, u) in obs[at - 3..at].iter_mut().zip(up.iter()) {
-                *o = *u as f32;
+    let (yaw, mirror) = match layout {
+        ObservationLayout::Paper => (0.0, 1.0),
+        ObservationLayout::Extended => (heading(&base), 1.0),
+        ObservationLayout::Terrain => rolled_frame(&base),
+    };
+    let (s, c) = yaw.sin_cos();
+    // World vectors into the head frame: rotation by -yaw about z, left mirrored upside down.
+    let to_head = |vx: f64, vy: f64| (mirror * (c * vx + s * vy), -s * vx + c * vy);
+    let mut at = 0;
+    for &(part, size) in structure.parts() {
+        let out = &mut obs[at..at + size];
+        at += size;
+        match part {
+            ObservationPart::BasePosition => out.copy_from_slice(&[p.x as f32, p.y as f32]),
+            ObservationPart::JointStates => {
+                let joints = scratch.positions.iter().zip(&scratch.velocities);
+                for (pair, (q, v)) in out.chunks_exact_mut(2).zip(joints) {
+                    pair.copy_from_slice(&[*q as f32, *v as f32]);
+                }
             }
-            ground.write(map, [p.x, p.y, p.z], yaw, mirror, &mut obs[at..]);
+            ObservationPart::GoalVector => {
+                let (gx, gy) = to_head(goal.0 - p.x, goal.1 - p.y);
+                out.copy_from_slice(&[gx as f32, gy as f32]);
+            }
+            ObservationPart::Heading => out.copy_from_slice(&[s as f32, c as f32]),
+            ObservationPart::BaseVelocity => {
+                let v = base.linear_velocity;
+                let (vx, vy) = to_head(v.x, v.y);
+                out.copy_from_slice(&[vx as f32, vy as f32]);
+            }
+            ObservationPart::WavePhase => {
+                if let Some(phase) = wave_phase {
+                    let (s, c) = phase.sin_cos();
+                    out.copy_from_slice(&[s as f32, c as f32]);
+                }
+            }
+            ObservationPart::WorldUp => {
+                // The world's up in the head's own frame (not mirrored). The cube snake's joints
+                // all turn about its z axis, so the head's up is the whole body's: on hills it
+                // rolls over.
+                let up = base
+                    .pose
+                    .orientation
+                    .inverse_transform_vector(&nalgebra::Vector3::z());
+                for (o, u) in out.iter_mut().zip(up.iter()) {
+                    *o = *u as f32;
+                }
+            }
+            ObservationPart::HeightMap => ground.write(map, [p.x, p.y, p.z], yaw, mirror, out),
         }
     }
     Ok(base)

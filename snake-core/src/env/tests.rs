@@ -570,6 +570,10 @@ fn physics_trace_records_every_physics_step_and_changes_nothing() {
     ] {
         let per_step = config.physics_steps_per_env_step as usize;
         let n = config.joints();
+        let angles = config
+            .observation_structure()
+            .range(ObservationPart::JointStates)
+            .unwrap();
         let mut plain = env(config.clone());
         let mut traced = env(config.clone());
         assert!(traced.physics_trace().is_none());
@@ -614,7 +618,7 @@ fn physics_trace_records_every_physics_step_and_changes_nothing() {
                 assert_eq!(trace.positions[row], state.position);
                 assert_eq!(trace.velocities[row], state.velocity);
                 assert_eq!(trace.torques[row], state.motor_torque);
-                assert_eq!(b.obs[2 + 2 * j], state.position as f32);
+                assert_eq!(b.obs[angles.start + 2 * j], state.position as f32);
             }
             if config.action.mode == ActionMode::Joints {
                 let clipped = action
@@ -734,7 +738,12 @@ fn terrain_observation_is_the_extended_one_then_the_ground_under_and_around_the_
     // The paper's values and the wave's phase are the extended layout's; the goal and the velocity
     // are the same world vectors in the rolled head frame (observation::rolled_frame): turned by
     // its heading and, upside down, mirrored.
-    let n = 2 + 2 * 10;
+    // Where the goal vector starts: after the base position and the joints' pairs.
+    let n = terrain
+        .config()
+        .observation_structure()
+        .offset(ObservationPart::GoalVector)
+        .unwrap();
     let same = |a: &[f32], b: &[f32]| {
         assert_eq!(a[..n], b[..n]);
         assert_eq!(a[n + 6..dim], b[n + 6..dim]);
@@ -988,8 +997,18 @@ fn progress_around_ridges_measures_the_way_around_them() {
 /// baseline:steer as snakesim.agents.baselines writes it: the goal's bearing in the head frame (its
 /// -y ahead, +x to the left) from the observation's goal vector, steering clip(-bearing).
 fn steer(obs: &[f32], joints: usize) -> f32 {
-    let (gx, gy) = (obs[2 + 2 * joints], obs[3 + 2 * joints]);
+    let (gx, gy) = goal_vector(obs, joints);
     (-gx.atan2(-gy)).clamp(-1.0, 1.0)
+}
+
+/// The goal vector of an extended or terrain observation of a body of `joints` joints, read by the
+/// observation's structure (the part is where both layouts put it).
+fn goal_vector(obs: &[f32], joints: usize) -> (f32, f32) {
+    let at = ObservationLayout::Extended
+        .structure(joints, false, 0)
+        .range(ObservationPart::GoalVector)
+        .unwrap();
+    (obs[at.start], obs[at.start + 1])
 }
 
 #[test]
@@ -1026,7 +1045,8 @@ fn near_the_goal_baseline_steer_drives_whatever_the_action() {
     use rand::{Rng, SeedableRng};
     // The goal's distance from the goal vector that `steer` reads.
     fn distance(obs: &[f32], joints: usize) -> f64 {
-        f64::from(obs[2 + 2 * joints]).hypot(f64::from(obs[3 + 2 * joints]))
+        let (gx, gy) = goal_vector(obs, joints);
+        f64::from(gx).hypot(f64::from(gy))
     }
     const NEAR: f64 = 2.5;
     for (observation, residual) in [
@@ -1179,4 +1199,101 @@ fn a_larger_height_map_holds_the_default_one_in_its_middle() {
     };
     let m = invalid_message(SnakeEnv::new(bad));
     assert!(m.starts_with("height_map.side must be odd"), "{m}");
+}
+
+/// Every task's observation, in every layout (and the terrain layout with a larger height map), is
+/// its structure: the sizes sum to its length, the names are unique, and each named part holds what
+/// its name says.
+#[test]
+fn the_observation_structure_names_every_value() {
+    use crate::{HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING};
+    let layouts = ObservationLayout::ALL
+        .into_iter()
+        .map(|l| (l, HEIGHT_MAP_SIDE))
+        .chain([(ObservationLayout::Terrain, 7)]);
+    for (layout, side) in layouts {
+        for task in Task::ALL {
+            let config = EnvConfig {
+                observation: layout,
+                height_map: HeightMap {
+                    side,
+                    spacing: HEIGHT_MAP_SPACING,
+                },
+                ..EnvConfig::for_task(task, Preset::Paper, 6)
+            };
+            let what = format!(
+                "{} task, {} layout, side {side}",
+                task.name(),
+                layout.name()
+            );
+            let structure = config.observation_structure();
+            let names: Vec<_> = structure.named().collect();
+            assert_eq!(structure.len(), config.observation_dim(), "{what}");
+            let sum: usize = names.iter().map(|(_, n)| n).sum();
+            assert_eq!(sum, config.observation_dim(), "{what}");
+            let unique: std::collections::HashSet<_> = names.iter().map(|(n, _)| n).collect();
+            assert_eq!(unique.len(), names.len(), "{what}: {names:?}");
+            let has = |p: ObservationPart| structure.range(p).is_some();
+            assert_eq!(has(ObservationPart::GoalVector), layout.is_extended());
+            assert_eq!(
+                has(ObservationPart::WavePhase),
+                config.observes_wave_phase(),
+                "{what}"
+            );
+            assert_eq!(
+                has(ObservationPart::HeightMap),
+                layout == ObservationLayout::Terrain
+            );
+            for (name, _) in &names {
+                let part = ObservationPart::from_name(name).unwrap();
+                assert_eq!(structure.range_of(name), structure.range(part));
+            }
+            let mut e = env(config.clone());
+            let (mut obs, _) = e.reset(Some(5), ResetOptions::default()).unwrap();
+            assert_eq!(obs.len(), config.observation_dim(), "{what}");
+            for _ in 0..30 {
+                let slice = |p: ObservationPart| &obs[structure.range(p).unwrap()];
+                let snake = e.snake().unwrap();
+                let base = snake.base_state().unwrap();
+                let p = base.pose.position;
+                assert_eq!(
+                    slice(ObservationPart::BasePosition),
+                    [p.x as f32, p.y as f32]
+                );
+                let pairs: Vec<f32> = snake
+                    .joint_states()
+                    .unwrap()
+                    .iter()
+                    .flat_map(|j| [j.position as f32, j.velocity as f32])
+                    .collect();
+                assert_eq!(slice(ObservationPart::JointStates), pairs, "{what}");
+                if layout.is_extended() {
+                    let (gx, gy) = goal_vector(&obs, config.joints());
+                    let g = slice(ObservationPart::GoalVector);
+                    assert_eq!((g[0], g[1]), (gx, gy));
+                    let far = (e.goal().0 - p.x).hypot(e.goal().1 - p.y);
+                    let norm = f64::from(gx).hypot(f64::from(gy));
+                    assert!((norm - far).abs() < 1e-4 * far.max(1.0), "{what}");
+                    let h = slice(ObservationPart::Heading);
+                    assert!((h[0].hypot(h[1]) - 1.0).abs() < 1e-5, "{what}");
+                    let v = slice(ObservationPart::BaseVelocity);
+                    let speed = base.linear_velocity.x.hypot(base.linear_velocity.y);
+                    let seen = f64::from(v[0]).hypot(f64::from(v[1]));
+                    assert!((seen - speed).abs() < 1e-4 * speed.max(1.0), "{what}");
+                }
+                if has(ObservationPart::WavePhase) {
+                    let w = slice(ObservationPart::WavePhase);
+                    assert!((w[0].hypot(w[1]) - 1.0).abs() < 1e-5, "{what}");
+                }
+                if layout == ObservationLayout::Terrain {
+                    let up = slice(ObservationPart::WorldUp);
+                    let norm = (up.iter().map(|u| u * u).sum::<f32>()).sqrt();
+                    assert!((norm - 1.0).abs() < 1e-5, "{what}");
+                    assert_eq!(slice(ObservationPart::HeightMap).len(), side * side);
+                }
+                let action = vec![0.3f32; e.action_dim()];
+                obs = e.step(&action).unwrap().obs;
+            }
+        }
+    }
 }

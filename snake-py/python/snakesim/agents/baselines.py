@@ -17,32 +17,36 @@ from typing import Any
 
 import numpy as np
 
+from snakesim.envs.config import observation_slice
+
 #: The controllers by name.
 NAMES = ("gait", "steer")
 
 
-def goal_bearing(obs: np.ndarray, joints: int) -> np.ndarray:
-    """The goal's bearing from the head, radians (0 ahead, positive to the left), per row of ``obs``
-    (the extended and terrain layouts: the goal vector in the head frame follows the paper's 2 + 2N
-    values)."""
-    gx, gy = obs[:, 2 + 2 * joints], obs[:, 3 + 2 * joints]
+def goal_bearing(obs: np.ndarray, structure: Mapping[str, int]) -> np.ndarray:
+    """The goal's bearing from the head, radians (0 ahead, positive to the left), per row of ``obs``,
+    from its ``goal_vector`` (the extended and terrain layouts; ``structure`` is the env's
+    ``observation_structure``)."""
+    goal = observation_slice(structure, "goal_vector")
+    gx, gy = obs[:, goal.start], obs[:, goal.start + 1]
     # The head frame's -y points ahead and its +x to the left.
     return np.arctan2(gx, -gy)
 
 
 class Controller:
-    """``act(obs_batch) -> actions`` of a named baseline for a snake of ``joints`` joints."""
+    """``act(obs_batch) -> actions`` of a named baseline for observations of ``structure`` (the env's
+    ``observation_structure``)."""
 
-    def __init__(self, name: str, joints: int) -> None:
+    def __init__(self, name: str, structure: Mapping[str, int]) -> None:
         if name not in NAMES:
             raise ValueError(f"unknown baseline {name!r} (expected one of: {', '.join(NAMES)})")
-        self.name, self.joints = name, joints
+        self.name, self.structure = name, dict(structure)
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
         obs = np.atleast_2d(np.asarray(obs, dtype=np.float32))
         actions = np.zeros((obs.shape[0], 3), dtype=np.float32)
         if self.name == "steer":
-            actions[:, 0] = np.clip(-goal_bearing(obs, self.joints), -1.0, 1.0)
+            actions[:, 0] = np.clip(-goal_bearing(obs, self.structure), -1.0, 1.0)
         return actions
 
 

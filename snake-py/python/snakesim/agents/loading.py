@@ -653,7 +653,7 @@ def _load_baseline(
     try:
         probe = make_env(**env_kwargs)
         baselines.check_env(probe.config)
-        controller = baselines.Controller(name, probe.joints)
+        controller = baselines.Controller(name, probe.observation_structure)
     except (TypeError, ValueError) as error:
         raise AgentError(str(error)) from None
     return Agent(

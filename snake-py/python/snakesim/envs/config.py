@@ -78,3 +78,15 @@ def env_config(**kwargs: Any) -> str:
         # No limit of the env's own: a TimeLimit wrapper truncates (what gymnasium.make adds).
         table["max_episode_steps"] = LIMITS["episode_steps"]
     return json.dumps(table)
+
+
+def observation_slice(structure: Mapping[str, int], name: str) -> slice:
+    """The indices of the part ``name`` of an observation of ``structure`` (an env's
+    ``observation_structure``: name -> size, in order): ``obs[..., observation_slice(s, "goal_vector")]``.
+    A name the structure lacks raises KeyError naming those it has."""
+    start = 0
+    for part, size in structure.items():
+        if part == name:
+            return slice(start, start + size)
+        start += size
+    raise KeyError(f"the observation has no {name!r} (it has: {', '.join(structure)})")

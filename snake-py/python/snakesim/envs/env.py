@@ -16,7 +16,7 @@ from snakesim.envs.config import ENV_DEFAULTS as _D
 from snakesim.envs.config import GOAL_ENV_DEFAULTS as _G
 from snakesim.envs.config import PEGS_ENV_DEFAULTS as _P
 from snakesim.envs.config import ROUGH_ENV_DEFAULTS as _R
-from snakesim.envs.config import action_array, env_config
+from snakesim.envs.config import action_array, env_config, observation_slice
 from snakesim.envs.render import top_down
 
 
@@ -44,20 +44,37 @@ class SnakeEnv(gymnasium.Env):
     the steering is steer's and amplitude and frequency the middle of their ranges, whatever the
     action.
 
-    **Observation space**: ``Box(-inf, inf, (2 + 2N,), float32)`` with ``observation="paper"``: base
-    (head) x, base y, then for each joint its (angle, velocity) pair, interleaved. With
-    ``observation="extended"`` six values follow: the goal vector in the head frame (2), sin and cos of
-    the heading (2) and the head's planar velocity in the head frame (2); in the gait and residual
-    action modes two more, sin and cos of the wave's phase at the head. ``observation="terrain"``
-    adds to that the world's up in the head frame (3 values; (0, 0, 1) upright) and a height map of
-    the ground around the head (25 values, last): the ground's height minus the head's z at a 5 x 5
-    grid of points 0.75 m apart, centred on the head and turned with its heading: five rows from
-    1.5 m ahead to 1.5 m behind, each from 1.5 m to the right to 1.5 m to the left (docs/tasks.md,
-    "The terrain observation"); ``height_map={"side": 9, "spacing": 0.75}`` makes it a 9 x 9
-    grid (81 values; ``side`` odd, at most 15, ``spacing`` in (0, 2] m) that sees 3 m around. Its
-    goal vector, heading, velocity and map are in the rolled head frame: the heading of the body's
-    long axis, with left mirrored while the head is upside down, so that rolling over on hills
-    does not scramble them (upright and level, the extended frame).
+    **Observation space**: ``Box(-inf, inf, (D,), float32)``, every value the simulator's double cast
+    to float32. ``env.observation_structure`` names its parts in order, name -> size, summing to D
+    (Gymnasium's convention, as Swimmer-v5's; built from the one description in snake-core,
+    ``ObservationLayout::structure``); ``snakesim.envs.config.observation_slice(structure, name)``
+    gives a part's indices. The parts, in order, of a snake of N joints (a robot: its movable joints):
+
+    =================  ======  =====================================================================
+    name               size    meaning
+    =================  ======  =====================================================================
+    ``base_position``  2       base (head) x and y in the world, m
+    ``joint_states``   2N      per joint from the head, its angle (rad) and velocity (rad/s),
+                               interleaved: angle 0, velocity 0, angle 1, ...
+    ``goal_vector``    2       goal minus base position in the head frame (x: left, -y: ahead), m
+    ``heading``        2       sin and cos of the head frame's heading
+    ``base_velocity``  2       the head's planar velocity in the head frame, m/s
+    ``wave_phase``     2       sin and cos of the wave's phase at the head
+    ``world_up``       3       the world's up in the head's own frame; (0, 0, 1) upright
+    ``height_map``     side^2  ground height minus the head's z on the height map's grid, m
+    =================  ======  =====================================================================
+
+    ``observation="paper"`` (the default): ``base_position`` and ``joint_states``, D = 2 + 2N.
+    ``observation="extended"`` adds ``goal_vector``, ``heading`` and ``base_velocity`` and, in the gait
+    and residual action modes, ``wave_phase``. ``observation="terrain"`` adds to that ``world_up`` and
+    ``height_map`` (25 values, last): the ground's height minus the head's z at a 5 x 5 grid of
+    points 0.75 m apart, centred on the head and turned with its heading: five rows from 1.5 m ahead
+    to 1.5 m behind, each from 1.5 m to the right to 1.5 m to the left (docs/tasks.md, "The terrain
+    observation"); ``height_map={"side": 9, "spacing": 0.75}`` makes it a 9 x 9 grid (81 values;
+    ``side`` odd, at most 15, ``spacing`` in (0, 2] m) that sees 3 m around. Its goal vector,
+    heading, velocity and map are in the rolled head frame: the heading of the body's long axis, with
+    left mirrored while the head is upside down, so that rolling over on hills does not scramble
+    them (upright and level, the extended frame).
 
     **Reward**: minus the planar head-goal distance (times ``reward["distance_weight"]``, 1); 100
     instead once the head is within ``goal_radius`` of the goal. Optional terms (``reward={...}``, off
@@ -100,8 +117,11 @@ class SnakeEnv(gymnasium.Env):
     for bit): the unpickled env needs ``reset()``, and its ``step()`` raises
     ``gymnasium.error.ResetNeeded`` until then, also under wrappers that saw a reset.
 
-    **Version history**: v0, the paper's env. :class:`SnakeGoalEnv` (``snakesim/SnakeGoal-v0``) is the
-    same env with the goal-reaching task's defaults.
+    **Version history** (Gymnasium's rule: a change that can change learning, in the observation, the
+    action, the reward, the episode's end, the dynamics or a default, bumps the id's ``-vN``; one that
+    cannot, such as speed or documentation, keeps it): v0, initial: the paper's env.
+    :class:`SnakeGoalEnv` (``snakesim/SnakeGoal-v0``) is the same env with the goal-reaching task's
+    defaults.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -157,6 +177,9 @@ class SnakeEnv(gymnasium.Env):
         self.joints = self._env.joints
         self.action_space = spaces.Box(-1.0, 1.0, (self._env.action_dim,), dtype=np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, (self._env.observation_dim,), dtype=np.float32)
+        #: The observation's parts, name -> size, in order (Gymnasium's ``observation_structure``).
+        self.observation_structure: dict[str, int] = self._env.observation_structure
+        self._base_position = observation_slice(self.observation_structure, "base_position")
         self._trail: list[tuple[float, float]] = []
         self._unpickled = False
 
@@ -192,7 +215,8 @@ class SnakeEnv(gymnasium.Env):
             )
         obs, reward, terminated, truncated, info = self._env.step(action_array(action))
         if self.render_mode is not None:
-            self._trail.append((float(obs[0]), float(obs[1])))
+            x, y = obs[self._base_position].tolist()
+            self._trail.append((x, y))
         return obs, reward, terminated, truncated, info
 
     def cube_poses(self) -> np.ndarray:
@@ -271,14 +295,29 @@ class SnakeGoalEnv(SnakeEnv):
       ``action={"mode": "residual"}`` instead adds a per-joint correction to a fixed wave, and
       ``action={"mode": "joints"}`` sets the joint targets as the paper does.
     - **Control rate**: 30 Hz (``physics_steps_per_env_step`` 8).
-    - **Observation space**: ``Box(-inf, inf, (2 + 2N + 8,), float32)``, the ``extended`` layout: the
-      paper's values, the goal in the head frame, the heading, the head's planar velocity, then sin
-      and cos of the wave's phase.
+    - **Observation space**: ``Box(-inf, inf, (2 + 2N + 8,), float32)``, the ``extended`` layout;
+      ``observation_structure`` (see :class:`SnakeEnv` for every part):
+
+      =================  ====  ===================================================================
+      name               size  meaning
+      =================  ====  ===================================================================
+      ``base_position``  2     base (head) x and y in the world, m
+      ``joint_states``   2N    per joint, its angle (rad) and velocity (rad/s), interleaved
+      ``goal_vector``    2     goal minus base position in the head frame, m
+      ``heading``        2     sin and cos of the head frame's heading
+      ``base_velocity``  2     the head's planar velocity in the head frame, m/s
+      ``wave_phase``     2     sin and cos of the wave's phase at the head (gait, residual modes)
+      =================  ====  ===================================================================
+
+      ``observation="terrain"`` appends ``world_up`` (3) and ``height_map`` (side^2, 25 by default);
+      ``observation="paper"`` keeps only ``base_position`` and ``joint_states``.
     - **Reward**: progress towards the goal (metres per step, ``progress_weight`` 1) and 10 on
       arrival (``success_reward``); no distance term (``distance_weight`` 0).
     - **Episode end**: the goal reached (terminated) or 600 env steps, 20 s (truncated).
+    - **Arguments**: :class:`SnakeEnv`'s, with the defaults above (``joints`` 5, ``preset`` "paper").
 
-    **Version history**: v0.
+    **Version history** (a change that can change learning bumps ``-vN``; see :class:`SnakeEnv`):
+    v0, initial.
     """
 
     task = "goal"
@@ -341,7 +380,16 @@ class SnakePegsEnv(SnakeGoalEnv):
       0.7 and is moved by up to ``jitter`` 0.08 m along and across.
     - **Episode end**: the goal reached (terminated) or 900 env steps, 30 s (truncated).
 
-    ``robot=`` puts a robot file's robot in the same task. **Version history**: v0.
+    - **Observation space**: the goal task's (:class:`SnakeGoalEnv`), ``observation_structure``
+      ``base_position`` (2), ``joint_states`` (2N), ``goal_vector`` (2), ``heading`` (2),
+      ``base_velocity`` (2), ``wave_phase`` (2); the pegs are not observed (``observation="terrain"``
+      appends ``world_up`` (3) and a ``height_map`` (side^2) of the ground, which pegs are not part of).
+    - **Arguments**: :class:`SnakeEnv`'s, with the defaults above.
+
+    ``robot=`` puts a robot file's robot in the same task.
+
+    **Version history** (a change that can change learning bumps ``-vN``; see :class:`SnakeEnv`):
+    v0, initial.
     """
 
     task = "pegs"
@@ -383,7 +431,17 @@ class SnakeRoughEnv(SnakeGoalEnv):
       beyond the edge of the ground's square, falling off the world, ends it too (terminated,
       ``info["success"]`` False).
 
-    ``robot=`` puts a robot file's robot in the same task. **Version history**: v0.
+    - **Observation space**: the goal task's (:class:`SnakeGoalEnv`), ``observation_structure``
+      ``base_position`` (2), ``joint_states`` (2N), ``goal_vector`` (2), ``heading`` (2),
+      ``base_velocity`` (2), ``wave_phase`` (2); ``observation="terrain"`` appends ``world_up`` (3)
+      and ``height_map`` (side^2, 25 by default), and puts the goal vector, heading, velocity and map
+      in the rolled head frame (see :class:`SnakeEnv`).
+    - **Arguments**: :class:`SnakeEnv`'s, with the defaults above.
+
+    ``robot=`` puts a robot file's robot in the same task.
+
+    **Version history** (a change that can change learning bumps ``-vN``; see :class:`SnakeEnv`):
+    v0, initial.
     """
 
     task = "rough"

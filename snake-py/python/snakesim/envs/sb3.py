@@ -40,6 +40,8 @@ class SnakeVecEnv(VecEnv):
             spaces.Box(-np.inf, np.inf, (dim,), dtype=np.float32),
             spaces.Box(-1.0, 1.0, (actions,), dtype=np.float32),
         )
+        #: A single env's observation parts, name -> size, in order (``SnakeEnv.observation_structure``).
+        self.observation_structure: dict[str, int] = self._core.observation_structure
         self._actions: np.ndarray | None = None
 
     def reset(self) -> np.ndarray:

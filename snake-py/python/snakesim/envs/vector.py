@@ -45,6 +45,8 @@ class SnakeVectorEnv(VectorEnv):
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (dim,), dtype=np.float32)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
+        #: A single env's observation parts, name -> size, in order (``SnakeEnv.observation_structure``).
+        self.observation_structure: dict[str, int] = self._core.observation_structure
 
     def reset(
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None

@@ -1,0 +1,58 @@
+//! [`Body`]: the simulated body of a run or an episode, the built-in snake or a URDF robot, driven
+//! through [`Simulation`] either way.
+
+use crate::{Robot, Simulation, Snake};
+
+/// A simulated body: the built-in snake of cubes or a URDF robot.
+///
+/// ```
+/// use snake_core::{Body, Preset, Snake, StartPose};
+///
+/// let config = Preset::Paper.config(3);
+/// let mut body = Body::Cubes(Snake::new(&config, StartPose::resting(config.half_extent))?);
+/// body.sim_mut().step()?;
+/// assert_eq!(body.sim().joints(), 3);
+/// assert!(body.snake().is_some() && body.robot().is_none());
+/// # Ok::<(), snake_core::Error>(())
+/// ```
+#[derive(Debug)]
+pub enum Body {
+    /// The built-in snake.
+    Cubes(Snake),
+    /// A URDF robot.
+    Robot(Robot),
+}
+
+impl Body {
+    /// The body, whichever it is, to read.
+    pub fn sim(&self) -> &dyn Simulation {
+        match self {
+            Body::Cubes(s) => s,
+            Body::Robot(r) => r,
+        }
+    }
+
+    /// The body, whichever it is, to drive and step.
+    pub fn sim_mut(&mut self) -> &mut dyn Simulation {
+        match self {
+            Body::Cubes(s) => s,
+            Body::Robot(r) => r,
+        }
+    }
+
+    /// The built-in snake, if it is one.
+    pub fn snake(&self) -> Option<&Snake> {
+        match self {
+            Body::Cubes(s) => Some(s),
+            Body::Robot(_) => None,
+        }
+    }
+
+    /// The robot, if it is one.
+    pub fn robot(&self) -> Option<&Robot> {
+        match self {
+            Body::Cubes(_) => None,
+            Body::Robot(r) => Some(r),
+        }
+    }
+}
