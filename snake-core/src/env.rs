@@ -262,6 +262,9 @@ pub struct SnakeEnv {
     course: course::Course,
     /// The distance the progress term measured after the latest step or reset.
     progress_distance: f64,
+    /// The observation's parts ([`EnvConfig::observation_structure`]), derived once: every reset and
+    /// step writes the observation by it.
+    structure: ObservationStructure,
 }
 
 impl SnakeEnv {
@@ -278,6 +281,7 @@ impl SnakeEnv {
         config.validate()?;
         let n = config.joints();
         let driver = Driver::new(&config);
+        let structure = config.observation_structure();
         Ok(SnakeEnv {
             previous_action: vec![0.0; config.action_dim()],
             driver,
@@ -307,6 +311,7 @@ impl SnakeEnv {
             ground: height_map::GroundProbe::Plane,
             course: course::Course::default(),
             progress_distance: 0.0,
+            structure,
         })
     }
 
@@ -473,7 +478,7 @@ impl SnakeEnv {
         self.driver.reset();
         let base = observation::write(
             self.config.observation,
-            &self.config.observation_structure(),
+            &self.structure,
             snake,
             self.goal,
             self.wave_phase(),
@@ -655,7 +660,7 @@ impl SnakeEnv {
         let phase = per_physics_step.then(|| driver.wave_phase());
         let base = observation::write(
             self.config.observation,
-            &self.config.observation_structure(),
+            &self.structure,
             snake,
             self.goal,
             phase.filter(|_| self.config.observes_wave_phase()),
