@@ -82,8 +82,9 @@ pub fn one_line(message: String) -> String {
 /// expected). Long enough for the longest list of allowed keys we print.
 pub const MAX_ERROR_CHARS: usize = 600;
 
-/// `message` cut in its middle to at most `MAX_ERROR_CHARS` characters.
-fn capped(message: String) -> String {
+/// `message` cut in its middle to at most `MAX_ERROR_CHARS` characters (the Python CLI cuts its
+/// lines with this too, through `snakesim._core.capped_message`).
+pub fn capped(message: String) -> String {
     let count = message.chars().count();
     if count <= MAX_ERROR_CHARS {
         return message;

@@ -37,6 +37,13 @@ fn arch_label(arch: &str) -> PyResult<String> {
     Ok(arch.to_string())
 }
 
+/// `message` cut in its middle to `LIMITS["error_chars"]` characters, as snake-core cuts its own
+/// errors: the one rule for every error line, Rust's and Python's.
+#[pyfunction]
+fn capped_message(message: String) -> String {
+    snake_core::error::capped(message)
+}
+
 /// The defaults of a run configuration, as JSON.
 #[pyfunction]
 fn run_config_defaults() -> String {
@@ -505,6 +512,7 @@ fn train<'py>(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(capped_message, m)?)?;
     m.add_function(wrap_pyfunction!(run_config_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(env_keyword_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(resolve_run_config, m)?)?;

@@ -8,8 +8,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from snakesim import _core
 from snakesim.files import output_kind
-from snakesim.limits import LIMITS
 
 
 class UserError(Exception):
@@ -21,13 +21,9 @@ def one_line(message: object) -> str:
 
 
 def capped(line: str) -> str:
-    """``line`` cut in its middle to LIMITS['error_chars'] characters (as the Rust side cuts its
-    messages): the start names the command and the file, the end says what was expected."""
-    limit = LIMITS["error_chars"]
-    if len(line) <= limit:
-        return line
-    tail = (limit - 3) // 3
-    return f"{line[: limit - 3 - tail]}...{line[len(line) - tail :]}"
+    """``line`` cut in its middle to LIMITS['error_chars'] characters, by the Rust side's own rule:
+    the start names the command and the file, the end says what was expected."""
+    return _core.capped_message(line)
 
 
 def report(command: str, message: object) -> str:
