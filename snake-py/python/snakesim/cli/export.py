@@ -1,45 +1,85 @@
-"""``snakesim export``: a native policy as a Stable-Baselines3 zip."""
+"""``snakesim export``: a policy as a Stable-Baselines3 zip (native models) and as an ONNX graph (any
+model), for PPO.load and for the robot."""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from snakesim.cli.args import agent_options, load_agent
 from snakesim.cli.errors import UserError, check_writable
 
 
-def cmd_export(args: argparse.Namespace) -> int:
-    from snakesim.runs.export import to_sb3, vecnormalize_path
+def _output(path: str, flag: str, suffix: str) -> Path:
+    out = check_writable(path, flag)
+    if out.suffix.lower() != suffix:
+        raise UserError(f"cannot write {flag} {out}: expected a {suffix} file")
+    return out
 
-    out = check_writable(args.sb3, "--sb3")
-    if out.suffix.lower() != ".zip":
-        raise UserError(f"cannot write --sb3 {out}: expected a .zip file")
-    # The observation statistics go beside the zip (when the policy has them).
-    outputs = [(out, "--sb3"), (vecnormalize_path(out), "--sb3's statistics")]
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from snakesim.agents.loading import BASELINE_PREFIX
+    from snakesim.runs.export import to_sb3, vecnormalize_path
+    from snakesim.runs.onnx import INPUT, OUTPUT, ExportError, to_onnx_bytes, write_bytes
+
+    if args.sb3 is None and args.onnx is None:
+        raise UserError("give --onnx POLICY.onnx, --sb3 MODEL.zip or both")
+    if args.source.startswith(BASELINE_PREFIX):
+        raise UserError(f"{args.source} is a hand-made controller, not a model: export takes runs and models")
+    outputs: list[tuple[str | Path, str]] = []
+    sb3 = onnx = None
+    if args.sb3 is not None:
+        sb3 = _output(args.sb3, "--sb3", ".zip")
+        # The observation statistics go beside the zip (when the policy has them).
+        outputs += [(sb3, "--sb3"), (vecnormalize_path(sb3), "--sb3's statistics")]
+    if args.onnx is not None:
+        onnx = _output(args.onnx, "--onnx", ".onnx")
+        outputs.append((onnx, "--onnx"))
     agent = load_agent(args, outputs)
-    if agent.kind != "native":
+    if sb3 is not None and agent.kind != "native":
         raise UserError(
-            f"{agent.path} is already a Stable-Baselines3 model; export takes native runs and models"
+            f"{agent.path} is already a Stable-Baselines3 model; --sb3 takes native runs and models "
+            "(--onnx takes both)"
         )
-    try:
-        written = to_sb3(agent, out)
-    except OSError as error:
-        raise UserError(f"cannot write --sb3 {out}: {error.strerror or error}") from None
-    except ValueError as error:
-        raise UserError(str(error)) from None
-    print(
-        f"wrote {', '.join(map(str, written))} (PPO-{agent.arch}, {agent.joints} joints; load with PPO.load)"
-    )
+    # The graph is built (and checked) before anything is written.
+    graph = None
+    if onnx is not None:
+        try:
+            graph = to_onnx_bytes(agent)
+        except (ExportError, ImportError) as error:
+            raise UserError(str(error)) from None
+    if sb3 is not None:
+        try:
+            written = to_sb3(agent, sb3)
+        except OSError as error:
+            raise UserError(f"cannot write --sb3 {sb3}: {error.strerror or error}") from None
+        except ValueError as error:
+            raise UserError(str(error)) from None
+        files = ", ".join(map(str, written))
+        print(f"wrote {files} (PPO-{agent.arch}, {agent.joints} joints; load with PPO.load)")
+    if onnx is not None and graph is not None:
+        try:
+            write_bytes(onnx, graph)
+        except OSError as error:
+            raise UserError(f"cannot write --onnx {onnx}: {error.strerror or error}") from None
+        print(
+            f"wrote {onnx} ({agent.label}, {agent.joints} joints; input {INPUT!r} [batch, obs], output "
+            f"{OUTPUT!r} [batch, actions]; run with onnxruntime, see docs/deploy.md)"
+        )
     return 0
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
         "export",
-        help="write a native run's policy as a Stable-Baselines3 zip",
-        description="Write a native policy as an SB3 PPO zip that PPO.load opens and that acts as the native "
-        "policy does (observation statistics, if any, go beside it as NAME_vecnormalize.pkl).",
+        help="write a policy as an ONNX graph (for the robot) or a native one as a Stable-Baselines3 zip",
+        description="Write a policy for use outside snakesim. --onnx: any model (native or SB3) as an ONNX "
+        "graph from a batch of raw observations to the deterministic actions, observation normalisation "
+        "included (docs/deploy.md). --sb3: a native policy as an SB3 PPO zip that PPO.load opens and that "
+        "acts as the native policy does (observation statistics, if any, go beside it as "
+        "NAME_vecnormalize.pkl). Give either or both.",
     )
     agent_options(p)
-    p.add_argument("--sb3", required=True, metavar="MODEL.zip", help="the zip to write")
+    p.add_argument("--sb3", metavar="MODEL.zip", help="the SB3 zip to write (native models only)")
+    p.add_argument("--onnx", metavar="POLICY.onnx", help="the ONNX graph to write")
     p.set_defaults(func=cmd_export)
