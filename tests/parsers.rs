@@ -240,3 +240,105 @@ proptest! {
         checks::env_keywords(keywords.as_bytes());
     }
 }
+
+/// A robot file's `max_velocity` (`motors:` and per joint under `joints:`): zero, negative,
+/// non-finite, beyond `limits::MAX_MOTOR_VELOCITY` or not a number is one line naming the file and the
+/// key; `joints:` names only movable joints of the URDF. Left out, a motor has no limit.
+#[test]
+fn a_bad_max_velocity_is_one_line_naming_the_file_and_key() {
+    let dir = std::env::temp_dir().join(format!("snakesim-max-velocity-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let box_link = |name: &str| {
+        format!(
+            "<link name=\"{name}\"><inertial><mass value=\"0.1\"/><inertia ixx=\"1e-4\" ixy=\"0\" \
+             ixz=\"0\" iyy=\"1e-4\" iyz=\"0\" izz=\"1e-4\"/></inertial><collision><geometry>\
+             <box size=\"0.1 0.1 0.1\"/></geometry></collision></link>"
+        )
+    };
+    let urdf = format!(
+        "<robot name=\"r\">{}{}{}<joint name=\"bend\" type=\"revolute\"><parent link=\"a\"/>\
+         <child link=\"b\"/><origin xyz=\"0.2 0 0\"/><axis xyz=\"0 0 1\"/>\
+         <limit lower=\"-1\" upper=\"1\" effort=\"5\" velocity=\"3\"/></joint>\
+         <joint name=\"weld\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/>\
+         <origin xyz=\"0.2 0 0\"/></joint></robot>",
+        box_link("a"),
+        box_link("b"),
+        box_link("c")
+    );
+    std::fs::write(dir.join("r.urdf"), urdf).unwrap();
+    let load = |body: &str| {
+        let file = dir.join("servo.yaml");
+        std::fs::write(&file, format!("urdf: r.urdf\n{body}\n")).unwrap();
+        snake_core::RobotSpec::load(&file)
+    };
+    let limit = snake_core::limits::MAX_MOTOR_VELOCITY;
+    for value in [
+        "0",
+        "-1",
+        "-0.0",
+        ".nan",
+        ".inf",
+        "-.inf",
+        "1e5",
+        &format!("{:?}", limit * 1.001),
+    ] {
+        for (body, key) in [
+            (
+                format!("motors: {{max_velocity: {value}}}"),
+                "motors: max_velocity",
+            ),
+            (
+                format!("joints: {{bend: {{max_velocity: {value}}}}}"),
+                "joints: bend: max_velocity",
+            ),
+        ] {
+            let e = load(&body).expect_err(&body).to_string();
+            assert!(!e.contains('\n'), "{body}: {e}");
+            assert!(
+                e.contains("servo.yaml: ") && e.contains(key) && e.contains("must be in (0, "),
+                "{body}: {e}"
+            );
+        }
+    }
+    for (body, expected) in [
+        (
+            "motors: {max_velocity: fast}",
+            "servo.yaml: motors.max_velocity: invalid type",
+        ),
+        (
+            "motors: {max_velocity: [1]}",
+            "servo.yaml: motors.max_velocity: invalid type",
+        ),
+        ("motors: {max_speed: 1}", "unknown field `max_speed`"),
+        ("joints: {bend: {speed: 1}}", "unknown field `speed`"),
+        ("joints: {bend: 2}", "servo.yaml: joints.bend: invalid type"),
+        (
+            "joints: {neck: {max_velocity: 1}}",
+            "servo.yaml: joints: neck: no such joint in",
+        ),
+        (
+            "joints: {weld: {max_velocity: 1}}",
+            "servo.yaml: joints: weld: a fixed joint has no motor in",
+        ),
+    ] {
+        let e = load(body).expect_err(body).to_string();
+        assert!(!e.contains('\n') && e.contains(expected), "{body}: {e}");
+    }
+    // The largest value is allowed; a joint's own value wins over the robot's; absent is no limit.
+    let spec = load(&format!(
+        "motors: {{max_velocity: {limit:?}}}\njoints: {{bend: {{max_velocity: 2.5}}}}"
+    ))
+    .unwrap();
+    assert_eq!(
+        (spec.motors.max_velocity, spec.max_velocity(0)),
+        (Some(limit), Some(2.5))
+    );
+    let spec = load("motors: {max_velocity: 1.5}").unwrap();
+    assert_eq!(spec.max_velocity(0), Some(1.5));
+    let spec = load("motors: {kp: 0.2}").unwrap();
+    assert_eq!(
+        (spec.motors.max_velocity, spec.max_velocity(0)),
+        (None, None)
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -7,6 +7,8 @@
 //! plane and driven by random
 //! joint targets for 10 s. `reference/urdf_reference.py` runs each in pybullet; after every step the base
 //! pose and velocity, every movable joint's angle, velocity and motor torque must have identical bits.
+//! Robot files whose motors have a maximum velocity (`motors: max_velocity`, `joints:`) are pybullet's
+//! `setJointMotorControl2(maxVelocity=...)` on every movable joint, bit for bit as well.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -29,6 +31,9 @@ struct UrdfScenario {
     friction: Vec<(i32, [f64; 3])>,
     kp: f64,
     kd: f64,
+    /// Each movable joint's `maxVelocity`, `None` where it has none; absent: no joint has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_velocity: Option<Vec<Option<f64>>>,
     targets: PathBuf,
 }
 
@@ -380,6 +385,7 @@ fn check_random(tag: &str, seed: u64, count: usize, mix: Mix, steps: usize) {
                 friction,
                 kp: spec.motors.kp,
                 kd: spec.motors.kd,
+                max_velocity: None,
                 targets: target_path,
             });
             runs.push((spec, targets));
@@ -415,6 +421,187 @@ fn rigid_robots_of_fixed_joints() {
 #[test]
 fn robots_on_a_fixed_base() {
     check_random("base", 11, 3, Mix::FixedBase, TEN_SECONDS);
+}
+
+/// A random robot of at least two movable joints (the generator makes some of fixed joints only), and
+/// its URDF's path.
+fn random_movable_robot(rng: &mut ChaCha8Rng, dir: &Path, r: usize) -> (PathBuf, RobotSpec) {
+    let urdf = dir.join(format!("robot-{r}.urdf"));
+    loop {
+        let links = rng.gen_range(3..=7);
+        std::fs::write(&urdf, random_urdf(rng, links, Mix::Any)).unwrap();
+        let spec = RobotSpec::load(&urdf).expect("the generated URDF loads");
+        if spec.joint_names().len() >= 2 {
+            return (urdf, spec);
+        }
+    }
+}
+
+/// The largest |difference| between two runs, over every step and column.
+fn max_deviation(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// The largest |difference| of a joint angle (columns `q0..`) between two runs.
+fn max_angle_deviation(header: &[String], a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    let angles: Vec<usize> = (0..header.len())
+        .filter(|&c| header[c].starts_with('q') && !header[c].starts_with("qd"))
+        .collect();
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| angles.iter().map(move |&c| (x[c] - y[c]).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// One robot file with a maximum velocity: its spec, the scenario with the limit and the same run
+/// without it.
+struct ServoRun {
+    spec: RobotSpec,
+    limited: UrdfScenario,
+    free: UrdfScenario,
+    targets: Vec<Vec<f64>>,
+}
+
+/// Writes `yaml` as robot file `name` in `dir`, loads it, and draws jumping targets for it.
+fn servo_run(
+    rng: &mut ChaCha8Rng,
+    dir: &Path,
+    name: &str,
+    urdf: &Path,
+    start: [f64; 4],
+    yaml: &str,
+) -> ServoRun {
+    let file = dir.join(format!("{name}.yaml"));
+    std::fs::write(&file, yaml).unwrap();
+    let spec = RobotSpec::load(&file).expect("the robot file loads");
+    let m = spec.joint_names().len();
+    let limits: Vec<Option<f64>> = (0..m).map(|k| spec.max_velocity(k)).collect();
+    assert!(
+        limits.iter().all(Option::is_some),
+        "{name}: every joint limited"
+    );
+    let targets = random_targets(rng, &spec, TEN_SECONDS);
+    let target_path = dir.join(format!("{name}.targets.csv"));
+    write_targets(&target_path, &targets);
+    let limited = UrdfScenario {
+        name: name.to_owned(),
+        urdf: urdf.to_path_buf(),
+        start,
+        inertia: spec.inertia.to_string(),
+        friction: Vec::new(),
+        kp: spec.motors.kp,
+        kd: spec.motors.kd,
+        max_velocity: Some(limits),
+        targets: target_path,
+    };
+    let free = UrdfScenario {
+        name: format!("{name}-free"),
+        max_velocity: None,
+        ..limited.clone()
+    };
+    ServoRun {
+        spec,
+        limited,
+        free,
+        targets,
+    }
+}
+
+/// Robot files with `motors: max_velocity` (and a `joints:` override on some) against pybullet's
+/// `setJointMotorControl2(..., maxVelocity=V)` on every movable joint: random robots and the shipped
+/// yaw-pitch-16 at the SEA Snake's speed, driven for 10 s by targets that jump by up to 3.6 rad (the
+/// motor's target velocity, 0.1 * 240 * jump, reaches ~86 rad/s, far above every limit here). Every step
+/// is identical, and pybullet's run without the limit moves the joints visibly differently.
+#[test]
+fn servos_with_a_maximum_velocity() {
+    let dir = std::env::temp_dir().join(format!("snakesim-urdf-servo-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(47);
+    let mut runs = Vec::new();
+    for r in 0..4 {
+        let (urdf, plain) = random_movable_robot(&mut rng, &dir, r);
+        let pi = std::f64::consts::PI;
+        let start = [
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(0.3..0.8),
+            rng.gen_range(-pi..pi),
+        ];
+        let inertia = if r % 2 == 0 { "shapes" } else { "file" };
+        let mut yaml = format!(
+            "urdf: robot-{r}.urdf\nstart: {start:?}\ninertia: {inertia}\n\
+             motors: {{kp: {:?}, kd: {:?}, max_velocity: {:?}}}\n",
+            rng.gen_range(0.05..0.5),
+            rng.gen_range(0.3..1.5),
+            rng.gen_range(0.5..3.0),
+        );
+        // Every other robot overrides one joint's limit.
+        if r % 2 == 1 {
+            let names = plain.joint_names();
+            let name = names[rng.gen_range(0..names.len())];
+            yaml += &format!(
+                "joints:\n  {name}: {{max_velocity: {:?}}}\n",
+                rng.gen_range(4.0..8.0)
+            );
+        }
+        runs.push(servo_run(
+            &mut rng,
+            &dir,
+            &format!("servo-{r}"),
+            &urdf,
+            start,
+            &yaml,
+        ));
+    }
+    let shipped = snakesim_tests::repo_root().join("robots/yaw-pitch-16.urdf");
+    let yaml = format!(
+        "urdf: {}\nstart: [0, 0, 0.0254, 0]\nmotors: {{kp: 0.1, kd: 1.0, max_velocity: 3.49}}\n",
+        shipped.display()
+    );
+    let start = [0.0, 0.0, 0.0254, 0.0];
+    runs.push(servo_run(
+        &mut rng,
+        &dir,
+        "servo-yaw-pitch-16",
+        &shipped,
+        start,
+        &yaml,
+    ));
+    let scenarios: Vec<&UrdfScenario> = runs.iter().flat_map(|r| [&r.limited, &r.free]).collect();
+    let Some(out) = run_reference_script("urdf_reference.py", &scenarios, "urdf-servo") else {
+        return;
+    };
+    for run in &runs {
+        let limited = read_csv(&out.join(format!("{}.csv", run.limited.name)));
+        let free = read_csv(&out.join(format!("{}.csv", run.free.name)));
+        let ours = run_ours(&run.spec, &run.limited, &run.targets);
+        assert_identical(&run.limited.name, &limited.header, &limited.rows, &ours);
+        let deviation = max_deviation(&limited.rows, &ours);
+        assert_eq!(deviation, 0.0, "{}", run.limited.name);
+        // Without the limit (the robot file minus max_velocity): pybullet's array call, bit for bit.
+        let mut unlimited = run.spec.clone();
+        unlimited.motors.max_velocity = None;
+        unlimited.max_velocities.iter_mut().for_each(|v| *v = None);
+        let ours_free = run_ours(&unlimited, &run.free, &run.targets);
+        assert_identical(&run.free.name, &free.header, &free.rows, &ours_free);
+        let binds = max_angle_deviation(&limited.header, &limited.rows, &free.rows);
+        eprintln!(
+            "{}: deviation from pybullet {deviation:e}; joint angles with and without the limit \
+             differ by up to {binds:.3} rad",
+            run.limited.name
+        );
+        assert!(
+            binds > 0.1,
+            "{}: the limit does not bind (angles differ by {binds} rad)",
+            run.limited.name
+        );
+    }
+    std::fs::remove_dir_all(&out).ok();
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The env on `robots/paper-cubes-5.yaml` is the built-in 5-joint env: the same observations, rewards

@@ -209,7 +209,11 @@ btMultiBodyJointMotor* joint_motor(btMultiBody* body, int joint) {
     return static_cast<btMultiBodyJointMotor*>(const_cast<void*>(body->getLink(joint).m_userPtr));
 }
 
-// POSITION_CONTROL on one joint (PSCP 7282-7345); max_velocity <= 0 leaves the rhs clamp as it is.
+// POSITION_CONTROL on one joint (PSCP 7282-7345). max_velocity is setJointMotorControl2's maxVelocity:
+// pybullet.c sends it only when > 0 (b3JointControlSetMaximumVelocity), and the server then calls
+// setRhsClamp before anything else; otherwise the clamp stays as it was (+inf from the motor's
+// constructor). btMultiBodyJointMotor::createConstraintRows (3.24) clamps the row's target velocity
+// kp*erp*(q* - q)/dt + qdot + kd*(qdot* - qdot) to [-clamp, clamp]; the impulse bounds stay +-force*dt.
 void set_position_motor(btMultiBody* body, int joint, btScalar dt, double target_pos, double target_vel,
                         double force, double kp, double kd, double max_velocity) {
     btMultiBodyJointMotor* motor = joint_motor(body, joint);
@@ -540,7 +544,7 @@ int ss_set_position_targets(ss_world* w, int body, int count, const double* targ
 }
 
 int ss_set_position_targets_at(ss_world* w, int body, int count, const int* joints, const double* targets,
-                               const double* forces, double kp, double kd) {
+                               const double* forces, double kp, double kd, const double* max_velocities) {
     if (!w || (count > 0 && (!joints || !targets || !forces))) return fail(SS_ERR_NULL, "null argument");
     btMultiBody* mb = w->body(body);
     if (!mb) return fail(SS_ERR_BODY, "no such body");
@@ -551,12 +555,18 @@ int ss_set_position_targets_at(ss_world* w, int body, int count, const int* join
             return fail(SS_ERR_LINK, "joint has no motor");
         if (!std::isfinite(targets[j]) || !std::isfinite(forces[j]))
             return fail(SS_ERR_ARGUMENT, "joint targets and forces must be finite");
+        if (max_velocities && !(std::isfinite(max_velocities[j]) && max_velocities[j] >= 0))
+            return fail(SS_ERR_ARGUMENT, "maximum joint velocities must be finite and >= 0");
     }
     SS_GUARD_BEGIN
     // One command for all of them (PSCP 7282): each joint's motor in link order; the order of the joints
-    // within the command does not matter, each motor is set once.
-    for (int j = 0; j < count; ++j)
-        set_position_motor(mb, joints[j], w->dt, targets[j], 0.0, forces[j], kp, kd, -1.0);
+    // within the command does not matter, each motor is set once. With max_velocities, this is one
+    // setJointMotorControl2 per joint (setJointMotorControlArray has no maxVelocity); each touches its
+    // own motor only, so the result is the same.
+    for (int j = 0; j < count; ++j) {
+        const double max_velocity = max_velocities ? max_velocities[j] : -1.0;
+        set_position_motor(mb, joints[j], w->dt, targets[j], 0.0, forces[j], kp, kd, max_velocity);
+    }
     return SS_OK;
     SS_GUARD_END
 }

@@ -225,9 +225,13 @@ int ss_set_position_targets(ss_world* world, int body, int count, const double* 
                             double kp, double kd);
 
 /* setJointMotorControlArray(body, joints, POSITION_CONTROL, targetPositions, forces, positionGains=kp,
- * velocityGains=kd) on the given joints (each must have a motor: revolute or prismatic). */
+ * velocityGains=kd) on the given joints (each must have a motor: revolute or prismatic). max_velocities
+ * is NULL (none given: exactly setJointMotorControlArray) or holds count values, each joint's
+ * setJointMotorControl2 maxVelocity (rad/s, m/s for a prismatic joint): a value > 0 becomes the motor's
+ * rhs clamp, 0 leaves that joint's clamp as it is (pybullet's "not given"); a negative or non-finite
+ * value is SS_ERR_ARGUMENT. */
 int ss_set_position_targets_at(ss_world* world, int body, int count, const int* joints, const double* targets,
-                               const double* forces, double kp, double kd);
+                               const double* forces, double kp, double kd, const double* max_velocities);
 
 /* p.stepSimulation(): joint damping torques, then one internal step of dt. */
 int ss_world_step(ss_world* world);

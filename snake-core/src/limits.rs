@@ -143,6 +143,13 @@ pub const MAX_WORLD_FRICTION: f64 = 1.0e3;
 /// coefficient would act as 10 anyway (on the default plane, friction 0.5, a coefficient of 10 acts as 5).
 pub const MAX_SKIN_FRICTION: f64 = 10.0;
 
+/// Largest maximum velocity of a robot's motors (a robot file's `max_velocity`), rad/s (m/s for a
+/// prismatic joint). The limit clamps the motor's target velocity, so it matters only below the speeds
+/// a joint reaches: at 1e4 rad/s a joint would turn 42 rad (almost 7 turns) in one 1/240 s step, ten
+/// times an ungeared electric motor's no-load speed (10,000 rpm is ~1e3 rad/s; hobby and snake-robot
+/// servos turn at ~5-10 rad/s), so a larger value is a typo rather than a servo.
+pub const MAX_MOTOR_VELOCITY: f64 = 1.0e4;
+
 /// Largest model file read (a snakesim `.safetensors`, a Stable-Baselines3 `.zip`, or one member of
 /// such a zip once uncompressed), bytes (256 MiB: a network of the largest configurable width holds
 /// far less).

@@ -1,9 +1,10 @@
 //! Robots described by a URDF file, on the paper's ground plane, driven as a pybullet user drives them.
 //!
 //! A [`RobotSpec`] is a parsed URDF plus what pybullet users set in code: anisotropic friction (whole
-//! robot or per link), motor gains and the start pose. It comes from a URDF file alone or from a small
-//! YAML robot file around one ([`RobotFile`]). A [`Robot`] is that robot in a world of its own, built in
-//! the order of a pybullet script (docs/parity.md, "URDF robots"):
+//! robot or per link), motor gains, the motors' maximum velocity (whole robot or per joint) and the
+//! start pose. It comes from a URDF file alone or from a small YAML robot file around one
+//! ([`RobotFile`]). A [`Robot`] is that robot in a world of its own, built in the order of a pybullet
+//! script (docs/parity.md, "URDF robots"):
 //!
 //! ```python
 //! p.createMultiBody(0, p.createCollisionShape(p.GEOM_PLANE))
@@ -14,6 +15,10 @@
 //! # every step:
 //! p.setJointMotorControlArray(robot, movable, p.POSITION_CONTROL, targetPositions=targets,
 //!                             forces=[effort of each joint], positionGains=[kp] * M, velocityGains=[kd] * M)
+//! # or, where the robot file sets a max_velocity (the array call has no maxVelocity):
+//! for j, target, effort, v in zip(movable, targets, efforts, max_velocities):
+//!     p.setJointMotorControl2(robot, j, p.POSITION_CONTROL, targetPosition=target, force=effort,
+//!                             positionGain=kp, velocityGain=kd, maxVelocity=v)  # v left out if none
 //! p.stepSimulation()
 //! ```
 
@@ -27,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use crate::drawing::ShapeDrawing;
 use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, GaitKind, JointRoles, LateralUndulation, Serpenoid};
-use crate::limits::MAX_URDF_BYTES;
+use crate::limits::{short, MAX_MOTOR_VELOCITY, MAX_URDF_BYTES};
 use crate::math::StartPose;
 use crate::skin::{SkinAxis, SkinFriction};
 use crate::urdf::{Geometry, InertiaSource, UrdfRobot};
@@ -43,7 +48,7 @@ pub const DEFAULT_KP: f64 = 0.1;
 /// pybullet's default velocity gain.
 pub const DEFAULT_KD: f64 = 1.0;
 
-/// Motor gains of a robot file.
+/// Motor gains of a robot file, and how fast its servos turn.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Motors {
@@ -51,6 +56,11 @@ pub struct Motors {
     pub kp: f64,
     /// Velocity gain (pybullet's velocityGains), default 1.0.
     pub kd: f64,
+    /// Largest velocity every motor drives its joint at, rad/s (m/s for a prismatic joint): pybullet's
+    /// `setJointMotorControl2(maxVelocity=...)`, which clamps the motor's target velocity (a servo's
+    /// no-load speed). `None`, the default, is no limit (`setJointMotorControlArray`, as without it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_velocity: Option<f64>,
 }
 
 impl Default for Motors {
@@ -58,8 +68,18 @@ impl Default for Motors {
         Motors {
             kp: DEFAULT_KP,
             kd: DEFAULT_KD,
+            max_velocity: None,
         }
     }
+}
+
+/// Settings of one movable joint's motor in a robot file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSettings {
+    /// This joint's maximum velocity (overrides `motors: max_velocity`), rad/s or m/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_velocity: Option<f64>,
 }
 
 /// Settings of one link in a robot file.
@@ -80,12 +100,15 @@ pub struct LinkSettings {
 /// urdf: yaw-pitch-16.urdf          # relative to this file
 /// start: [0, 0, 0.03, 0]           # x, y, z (root link frame, m), yaw (rad); pybullet's default 0, 0, 0, 0
 /// inertia: shapes                  # or file (URDF_USE_INERTIA_FROM_FILE)
-/// motors: {kp: 0.1, kd: 1.0}       # pybullet's defaults
+/// motors: {kp: 0.1, kd: 1.0, max_velocity: 3.5}   # pybullet's gains; max_velocity (rad/s, m/s for a
+///                                  # prismatic joint): setJointMotorControl2's maxVelocity, no limit if absent
 /// anisotropic_friction: [1, 0.01, 0.01]   # every link, in its own frame
 /// skin_friction: {forward: 0.1, backward: 0.15, transverse: 0.2, axis: x}   # every link (issue 27)
 /// links:                           # per link, by URDF name
 ///   head: {anisotropic_friction: [1, 1, 1]}
 ///   tail: {skin_friction: {forward: 0.1, backward: 0.1, transverse: 0.1}}
+/// joints:                          # per movable joint, by URDF name
+///   neck: {max_velocity: 3.0}      # overrides motors: max_velocity for this joint
 /// gait: {segment_length: 0.0635, wave_length: 0.5, amplitude: 0.6}   # the sine gait's wave
 /// wave: {gait: lateral, steering: 0.1}   # the envs' steered wave (default: the sine)
 /// ```
@@ -100,7 +123,7 @@ pub struct RobotFile {
     /// Where inertias come from.
     #[serde(default)]
     pub inertia: InertiaSource,
-    /// Motor gains.
+    /// Motor gains and the motors' maximum velocity.
     #[serde(default)]
     pub motors: Motors,
     /// Anisotropic friction of every link (pybullet's `changeDynamics(anisotropicFriction=...)`).
@@ -113,6 +136,9 @@ pub struct RobotFile {
     /// Per-link settings by URDF link name.
     #[serde(default)]
     pub links: BTreeMap<String, LinkSettings>,
+    /// Per-joint motor settings by URDF joint name (movable joints only).
+    #[serde(default)]
+    pub joints: BTreeMap<String, JointSettings>,
     /// Parameters of the sine gait (`--gait sine`) for this robot; left out, pybullet's snake.py wave.
     #[serde(default)]
     pub gait: Option<LateralUndulation>,
@@ -195,8 +221,11 @@ pub struct RobotSpec {
     pub urdf: UrdfRobot,
     /// Where inertias come from.
     pub inertia: InertiaSource,
-    /// Motor gains.
+    /// Motor gains, and the maximum velocity of every motor that `max_velocities` leaves unset.
     pub motors: Motors,
+    /// Each movable joint's own maximum velocity, in pybullet's joint order (a robot file's `joints`);
+    /// `None` takes `motors.max_velocity`. See [`RobotSpec::max_velocity`].
+    pub max_velocities: Vec<Option<f64>>,
     /// Anisotropic friction per link in pybullet's order (index 0: the root); `None` leaves Bullet's.
     pub anisotropic_friction: Vec<Option<[f64; 3]>>,
     /// Skin friction per link in pybullet's order (index 0: the root); `None` keeps Bullet's friction.
@@ -209,6 +238,20 @@ pub struct RobotSpec {
     pub gait: Option<LateralUndulation>,
     /// The library gait the envs' actions steer instead of the sine wave (the robot file's `wave`).
     pub wave: Option<RobotWave>,
+}
+
+/// A robot file's `max_velocity` (at `key`): a finite speed in (0, [`MAX_MOTOR_VELOCITY`]]. Zero and
+/// negative values are refused rather than read as pybullet's "no limit": leaving the key out says that.
+fn check_max_velocity(file: &str, key: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 && v <= MAX_MOTOR_VELOCITY {
+        Ok(())
+    } else {
+        Err(invalid(format!(
+            "{file}: {key} must be in (0, {}] rad/s (m/s for a prismatic joint), got {}",
+            short(MAX_MOTOR_VELOCITY),
+            short(v)
+        )))
+    }
 }
 
 fn check_friction(file: &str, key: &str, a: [f64; 3]) -> Result<()> {
@@ -247,10 +290,12 @@ impl RobotSpec {
 
     fn from_urdf(urdf: UrdfRobot, path: &Path) -> Result<Self> {
         let n = urdf.links.len();
+        let movable = urdf.movable_joints().len();
         Ok(RobotSpec {
             urdf,
             inertia: InertiaSource::Shapes,
             motors: Motors::default(),
+            max_velocities: vec![None; movable],
             anisotropic_friction: vec![None; n],
             skin_friction: vec![None; n],
             start: None,
@@ -278,6 +323,10 @@ impl RobotSpec {
                 m.kp, m.kd
             )));
         }
+        if let Some(v) = m.max_velocity {
+            check_max_velocity(&shown, "motors: max_velocity", v)?;
+        }
+        let max_velocities = joint_max_velocities(&file.joints, &urdf, &shown, &urdf_path)?;
         let mut friction = vec![file.anisotropic_friction; urdf.links.len()];
         if let Some(a) = file.anisotropic_friction {
             check_friction(&shown, "anisotropic_friction", a)?;
@@ -329,6 +378,7 @@ impl RobotSpec {
             urdf,
             inertia: file.inertia,
             motors: m,
+            max_velocities,
             anisotropic_friction: friction,
             skin_friction: skin,
             start,
@@ -336,6 +386,16 @@ impl RobotSpec {
             gait: file.gait,
             wave,
         })
+    }
+
+    /// The maximum velocity of movable joint `k` (pybullet's joint order among the movable joints):
+    /// its own, else the robot's, else `None` (no limit).
+    pub fn max_velocity(&self, k: usize) -> Option<f64> {
+        self.max_velocities
+            .get(k)
+            .copied()
+            .flatten()
+            .or(self.motors.max_velocity)
     }
 
     /// Names of the movable joints, in pybullet's joint order.
@@ -375,6 +435,44 @@ impl RobotSpec {
             yaw: 0.0,
         })
     }
+}
+
+/// A robot file's `joints` table as one maximum velocity (or none) per movable joint, in pybullet's
+/// joint order; a name that is no movable joint of the URDF, or a bad value, is an error naming it.
+fn joint_max_velocities(
+    joints: &BTreeMap<String, JointSettings>,
+    urdf: &UrdfRobot,
+    shown: &str,
+    urdf_path: &Path,
+) -> Result<Vec<Option<f64>>> {
+    let movable = urdf.movable_joints();
+    let mut out = vec![None; movable.len()];
+    for (name, settings) in joints {
+        let k = movable
+            .iter()
+            .position(|&j| urdf.joint(j).is_some_and(|joint| &joint.name == name))
+            .ok_or_else(|| {
+                let fixed = urdf.links.iter().any(|l| {
+                    l.joint
+                        .as_ref()
+                        .is_some_and(|j| &j.name == name && !j.kind.is_movable())
+                });
+                let why = if fixed {
+                    "a fixed joint has no motor"
+                } else {
+                    "no such joint"
+                };
+                invalid(format!(
+                    "{shown}: joints: {name}: {why} in {}",
+                    urdf_path.display()
+                ))
+            })?;
+        if let Some(v) = settings.max_velocity {
+            check_max_velocity(shown, &format!("joints: {name}: max_velocity"), v)?;
+            out[k] = Some(v);
+        }
+    }
+    Ok(out)
 }
 
 /// A gait on a robot's joints: the gait's wave over the actuated joints (URDF effort > 0) in order,
@@ -488,6 +586,9 @@ pub struct Robot {
     movable: Vec<i32>,
     efforts: Vec<f64>,
     motors: Motors,
+    /// Each movable joint's maximum velocity, 0 where it has none (the shim's "not given"); `None`
+    /// when no joint has one, so that such a robot is driven exactly as pybullet's array call drives it.
+    max_velocities: Option<Vec<f64>>,
     dt: f64,
     steps: u64,
 }
@@ -532,12 +633,18 @@ impl Robot {
             .iter()
             .map(|&j| spec.urdf.joint(j).expect("movable joint").effort)
             .collect();
+        let limits: Vec<Option<f64>> = (0..joints.len()).map(|k| spec.max_velocity(k)).collect();
+        let max_velocities = limits
+            .iter()
+            .any(Option::is_some)
+            .then(|| limits.iter().map(|v| v.unwrap_or(0.0)).collect());
         Ok(Robot {
             world,
             body,
             movable: joints.iter().map(|&j| j as i32).collect(),
             efforts,
             motors: spec.motors,
+            max_velocities,
             dt: defaults.dt,
             steps: 0,
         })
@@ -595,6 +702,7 @@ impl Simulation for Robot {
             &self.efforts,
             self.motors.kp,
             self.motors.kd,
+            self.max_velocities.as_deref(),
         )
     }
     fn step(&mut self) -> Result<()> {

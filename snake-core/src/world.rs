@@ -576,6 +576,13 @@ impl World {
     /// `setJointMotorControlArray(body, joints, POSITION_CONTROL, targetPositions=targets,
     /// forces=forces, positionGains=[kp]*n, velocityGains=[kd]*n)`: each of `joints` must be a revolute,
     /// continuous or prismatic joint.
+    ///
+    /// `max_velocities`, one per joint, makes it `setJointMotorControl2(body, joint, POSITION_CONTROL,
+    /// ..., maxVelocity=v)` on each joint instead (the array call has no `maxVelocity`): a `v > 0`
+    /// clamps the motor's target velocity to `[-v, v]` (rad/s, m/s for a prismatic joint), 0 leaves that
+    /// joint's clamp as it is, as pybullet treats a `maxVelocity` that is not > 0. `None` is the array
+    /// call, bit for bit.
+    #[allow(clippy::too_many_arguments)] // pybullet's own argument list, one slice or gain each
     pub fn set_position_targets_at(
         &mut self,
         body: BodyId,
@@ -584,30 +591,42 @@ impl World {
         forces: &[f64],
         kp: f64,
         kd: f64,
+        max_velocities: Option<&[f64]>,
     ) -> Result<()> {
         self.joint_count(body)?;
-        if targets.len() != joints.len() || forces.len() != joints.len() {
+        let n = joints.len();
+        if targets.len() != n || forces.len() != n || max_velocities.is_some_and(|v| v.len() != n) {
             return Err(invalid(format!(
-                "{} joints, {} targets and {} forces",
-                joints.len(),
+                "{n} joints, {} targets, {} forces and {} maximum velocities",
                 targets.len(),
-                forces.len()
+                forces.len(),
+                max_velocities.map_or(n, <[f64]>::len)
             )));
         }
         finite(targets, "joint targets")?;
         finite(forces, "motor forces")?;
         finite(&[kp, kd], "motor gains")?;
-        // SAFETY: live world; the three slices hold joints.len() values each.
+        if let Some(v) = max_velocities {
+            if let Some(bad) = v.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(invalid(format!(
+                    "maximum joint velocities must be finite and >= 0, got {bad}"
+                )));
+            }
+        }
+        let max_velocities = max_velocities.map_or(std::ptr::null(), <[f64]>::as_ptr);
+        // SAFETY: live world; the three slices hold n values each, and max_velocities is null or
+        // addresses n values too.
         check(unsafe {
             bullet_sys::ss_set_position_targets_at(
                 self.ptr(),
                 body.0,
-                joints.len() as i32,
+                n as i32,
                 joints.as_ptr(),
                 targets.as_ptr(),
                 forces.as_ptr(),
                 kp,
                 kd,
+                max_velocities,
             )
         })
     }

@@ -13,6 +13,9 @@ SCENARIOS.json is a list of scenarios; each is written to OUT_DIR/<name>.csv. A 
     inertia     "shapes" (default flags) or "file" (URDF_USE_INERTIA_FROM_FILE)
     friction    list of [link, [ax, ay, az]]: changeDynamics(anisotropicFriction=...) in that order
     kp, kd      motor gains
+    max_velocity  optional: one value per movable joint, a number or null; when given, each step drives
+                every movable joint with setJointMotorControl2(..., maxVelocity=v), v left out where null
+                (setJointMotorControlArray has no maxVelocity); otherwise one setJointMotorControlArray
     targets     path of a CSV without header: row k holds the targets of every movable joint for step k
 The movable joints are the revolute and prismatic ones (continuous joints are revolute in pybullet), in
 joint order; each motor's force is the joint's URDF effort as pybullet reports it (getJointInfo).
@@ -58,11 +61,42 @@ def load(client, scenario):
     return robot, movable, forces, kp, kd, targets
 
 
+def drive(client, robot, movable, row, forces, kp, kd, max_velocity):
+    """Sets one step's position targets: one array call, or with maximum velocities one call per
+    joint, as a pybullet user writes each."""
+    m = len(movable)
+    if max_velocity is None:
+        client.setJointMotorControlArray(
+            robot,
+            movable,
+            p.POSITION_CONTROL,
+            targetPositions=row,
+            forces=forces,
+            positionGains=[kp] * m,
+            velocityGains=[kd] * m,
+        )
+        return
+    assert len(max_velocity) == m, f"{len(max_velocity)} maximum velocities for {m} movable joints"
+    for j, target, force, v in zip(movable, row, forces, max_velocity):
+        limit = {} if v is None else {"maxVelocity": v}
+        client.setJointMotorControl2(
+            robot,
+            j,
+            p.POSITION_CONTROL,
+            targetPosition=target,
+            force=force,
+            positionGain=kp,
+            velocityGain=kd,
+            **limit,
+        )
+
+
 def run(scenario, out_path):
     client = bullet_client.BulletClient(connection_mode=p.DIRECT)
     try:
         robot, movable, forces, kp, kd, targets = load(client, scenario)
         m = len(movable)
+        max_velocity = scenario.get("max_velocity")
         header = ["step", "t", "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw"]
         header += [f"q{j}" for j in range(m)]
         header += ["vx", "vy", "vz", "wx", "wy", "wz"]
@@ -73,15 +107,7 @@ def run(scenario, out_path):
             for step, row in enumerate(targets, start=1):
                 assert len(row) == m, f"{len(row)} targets for {m} movable joints"
                 if m:
-                    client.setJointMotorControlArray(
-                        robot,
-                        movable,
-                        p.POSITION_CONTROL,
-                        targetPositions=row,
-                        forces=forces,
-                        positionGains=[kp] * m,
-                        velocityGains=[kd] * m,
-                    )
+                    drive(client, robot, movable, row, forces, kp, kd, max_velocity)
                 client.stepSimulation()
                 pos, orn = client.getBasePositionAndOrientation(robot)
                 lin, ang = client.getBaseVelocity(robot)
