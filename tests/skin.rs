@@ -207,6 +207,7 @@ fn run_configs_and_saved_policies_carry_skin_friction() {
         net,
         obs_rms: None,
         env: spec,
+        steer_assist: None,
         timesteps: 0,
     };
     let dir = std::env::temp_dir().join(format!("snakesim-skin-model-{}", std::process::id()));

@@ -48,9 +48,9 @@ def main() -> None:
     episodes = int(sys.argv[1]) if len(sys.argv) > 1 else 30
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 1000
     ground = sys.argv[3] if len(sys.argv) > 3 else "worlds/slope-10.yaml"
-    steer = Controller("steer", JOINTS)
     for observation, frame in (("extended", "head's x axis"), ("terrain", "rolled frame")):
-        env = make_env(**env_kwargs(ground, observation))
+        kwargs = env_kwargs(ground, observation)
+        env, steer = make_env(**kwargs), Controller("steer", kwargs)
         done = [episode(env, steer, seed + i) for i in range(episodes)]
         lost = [d for d in done if not d[0]]
         rate = np.mean([d[0] for d in done])

@@ -19,7 +19,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from snakesim.agents.baselines import goal_bearing, plain_gait
+from snakesim.agents.baselines import goal_bearing
 from snakesim.agents.evaluation import run_episodes, summarize
 from snakesim.envs.config import observation_slice
 from snakesim.envs.env import make_env
@@ -76,7 +76,7 @@ def main() -> None:
     hold = float(args[3]) if len(args) > 3 else 5.0
     run = runconfig.load(Path(args[4]) if len(args) > 4 else CONFIG)
     joints = run["joints"]
-    kwargs = plain_gait({**run["env"], "joints": joints})
+    kwargs = {**run["env"], "joints": joints}
     structure = make_env(**kwargs).observation_structure
     summary = summarize(run_episodes(ridge_steer(structure, rise, hold), kwargs, episodes, seed))
     low, high = summary["success_rate_ci95"]

@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 
 pub use action::{
     ActionConfig, ActionMode, MAX_GAIT_AMPLITUDE, MAX_GAIT_FREQUENCY, MAX_GAIT_STEERING,
-    MAX_RESIDUAL_SCALE, MAX_STEER_NEAR_GOAL, STEER_RESIDUAL_GAIN,
+    MAX_RESIDUAL_SCALE,
 };
 pub use config::{
     EnvConfig, GoalDistribution, ObservationLayout, ObservationPart, ObservationStructure,
@@ -487,7 +487,6 @@ impl SnakeEnv {
             obs,
         )?;
         finite_output(obs, 0.0, 0.0)?;
-        self.driver.observe(obs);
         self.origin = (base.pose.position.x, base.pose.position.y);
         self.position = self.origin;
         self.work = 0.0;
@@ -668,7 +667,6 @@ impl SnakeEnv {
             &mut self.joints,
             obs,
         )?;
-        driver.observe(obs);
         Ok((base, work))
     }
 

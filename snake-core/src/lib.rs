@@ -37,6 +37,7 @@
 
 pub mod body;
 pub mod config;
+pub mod controllers;
 pub mod drawing;
 pub mod env;
 pub mod error;
@@ -54,6 +55,7 @@ pub mod world_file;
 
 pub use body::Body;
 pub use config::{Preset, SnakeConfig};
+pub use controllers::{AssistedEnv, ControlledEnv, HandController, SteerAssist};
 pub use drawing::ShapeDrawing;
 pub use env::{
     route_distance, ActionConfig, ActionMode, Capsule, Craters, Disc, DistancePrecision, EnvConfig,

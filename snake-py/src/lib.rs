@@ -10,6 +10,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use snake_core::env::{EnvConfig, Info, ObservationStructure, ResetOptions, SnakeEnv};
 use snake_core::{StartPose, StepBuffers, VecSnakeEnv};
 
+mod controllers;
 mod evaluation;
 mod lock;
 mod native;
@@ -440,6 +441,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
     m.add_class::<VecEnv>()?;
     native::register(m)?;
+    controllers::register(m)?;
     evaluation::register(m)?;
     lock::register(m)?;
     Ok(())

@@ -125,6 +125,8 @@ impl NativePolicy {
     #[pyo3(signature = (path, seed=0))]
     fn new(path: PathBuf, seed: u64) -> PyResult<Self> {
         let saved = model::load_policy(&path).map_err(model_error)?;
+        // `act` gives the policy's own actions; the assist is applied by whoever steps the env
+        // (snakesim's Agent.act, through `_core.SteerAssist`), as for any agent.
         let policy = Policy::from_saved(&saved);
         Ok(NativePolicy {
             path: path.display().to_string(),
@@ -185,6 +187,13 @@ impl NativePolicy {
     /// The env keywords it was trained with (besides joints and preset), as JSON.
     fn env_json(&self) -> String {
         Value::Object(self.saved.env.env.clone()).to_string()
+    }
+
+    /// The `steer_assist` it was trained with, as JSON (None without one).
+    fn steer_assist_json(&self) -> Option<String> {
+        self.saved
+            .steer_assist
+            .map(|a| serde_json::to_string(&a).expect("an assist serialises"))
     }
 
     /// Restarts the generator of sampled actions.

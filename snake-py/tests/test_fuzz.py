@@ -48,7 +48,6 @@ plausible = {
     "observation": st.sampled_from(["paper", "extended", "terrain"]),
     "action": st.fixed_dictionaries(
         {"mode": st.sampled_from(["joints", "gait", "residual"])},
-        optional={"steer_residual": st.booleans(), "steer_near_goal": st.floats(-1, 12)},
     ),
     "height_map": st.fixed_dictionaries({"side": st.integers(-1, 17), "spacing": st.floats(-0.5, 2.5)}),
     "reward": st.one_of(

@@ -356,10 +356,16 @@ def test_progress_around_craters_changes_progress_only_where_a_crater_is_in_the_
     assert "\n" not in str(error.value)
 
 
-def test_a_steer_residual_agents_baselines_drive_the_plain_gait_on_its_episodes(tmp_path):
-    """``action.steer_residual`` (the steering action corrects baseline:steer's): ``--env-from`` such
-    a model runs the baselines on the same env without it, so that steer is steer; bad uses are one
-    line."""
+def _libm_steer(obs: np.ndarray) -> np.float32:
+    """baseline:steer's steering from the goal vector of a 10-joint extended or terrain observation,
+    written independently of snakesim: clip(-atan2(gx, -gy), -1, 1) with libm's float32 arctangent
+    (numpy's can differ from it in the last bit)."""
+    return _steer_of(obs, 22)
+
+
+def _with_legacy_flag(tmp_path: Path, key: str, value, **env_config) -> Path:
+    """models/goal-10 with ``action.KEY`` in its recorded env, as models trained before the
+    steering assist left the env record it."""
     from safetensors import safe_open
     from safetensors.numpy import load_file, save_file
 
@@ -367,78 +373,55 @@ def test_a_steer_residual_agents_baselines_drive_the_plain_gait_on_its_episodes(
     with safe_open(str(source), "np") as f:
         meta = dict(f.metadata())
     recorded = json.loads(meta["env_config"])
-    recorded["action"]["steer_residual"] = True
-    model = tmp_path / "residual-goal-10.safetensors"
+    recorded["action"][key] = value
+    for name, v in env_config.items():
+        recorded[name] = v
+    model = tmp_path / f"legacy-{key}.safetensors"
     save_file(load_file(str(source)), str(model), metadata={**meta, "env_config": json.dumps(recorded)})
+    return model
 
+
+def test_a_model_recorded_with_the_envs_former_steer_flags_acts_through_its_assist(tmp_path):
+    """A model whose env records ``action.steer_residual`` (before the assist left the env) loads
+    with ``steer_assist`` {residual: true}: its env is the plain gait env (which the baselines of
+    ``--env-from`` share), and zero corrections drive exactly baseline:steer."""
+    model = _with_legacy_flag(tmp_path, "steer_residual", True)
     agent, baseline = load_agent(str(model)), load_agent("baseline:steer", env_from=str(model))
-    assert agent.env_kwargs["action"]["steer_residual"] is True
-    assert "steer_residual" not in baseline.env_kwargs["action"]
-    assert {**baseline.env_kwargs, "action": None} == {**agent.env_kwargs, "action": None}
-    assert snakesim.envs.env.make_env(**agent.env_kwargs).config["action"]["steer_residual"] is True
-    assert "steer_residual" not in snakesim.envs.env.make_env(**baseline.env_kwargs).config["action"]
+    assert (agent.steer_assist.residual, agent.steer_assist.near_goal) == (True, 0.0)
+    assert "steer_residual" not in agent.env_kwargs.get("action", {})
+    assert baseline.env_kwargs == agent.env_kwargs and baseline.steer_assist is None
 
-    # Zero corrections steer as steer does: the first step (before rounding of the arctangent, numpy's
-    # float32 one against libm's, can set them apart) gives the same observation.
-    residual = snakesim.envs.env.make_env(**agent.env_kwargs)
-    plain = snakesim.envs.env.make_env(**baseline.env_kwargs)
-    obs_r, _ = residual.reset(seed=3)
-    obs_p, _ = plain.reset(seed=3)
-    np.testing.assert_array_equal(obs_r, obs_p)
-    obs_r, *_ = residual.step(np.zeros(3, np.float32))
-    obs_p, *_ = plain.step(baseline.policy.act(obs_p)[0])
-    np.testing.assert_array_equal(obs_r, obs_p)
-
-    for action, kind, message in (
-        ({"mode": "joints", "steer_residual": True}, ValueError, "steer_residual: needs action mode 'gait'"),
-        ({"mode": "gait", "steer_residual": "yes"}, TypeError, "action.steer_residual: invalid type"),
-    ):
-        with pytest.raises(kind, match=message) as error:
-            snakesim.SnakeGoalEnv(joints=5, action=action)
-        assert "\n" not in str(error.value)
-    with pytest.raises(ValueError, match="observation 'extended' or 'terrain'"):
-        snakesim.SnakeEnv(joints=5, action={"mode": "gait", "steer_residual": True})
+    env = snakesim.envs.env.make_env(**agent.env_kwargs)
+    obs, _ = env.reset(seed=3)
+    for _ in range(40):
+        composed = agent.steer_assist.apply(obs[None, :], np.zeros((1, 3), np.float32))[0]
+        np.testing.assert_array_equal(composed, baseline.act(obs)[0])
+        assert composed[0] == _libm_steer(obs) and composed.dtype == np.float64
+        obs, *_ = env.step(composed)
+    # A full correction reaches either end whatever steer asks.
+    for correction in (-1.0, 1.0):
+        assert agent.steer_assist.apply(obs[None, :], np.array([[correction, 0, 0]]))[0, 0] == correction
 
 
-def test_near_the_goal_steer_drives_and_the_baselines_run_without_the_hand_over(tmp_path):
-    """``action.steer_near_goal``: within that distance of the goal baseline:steer's action drives
-    whatever the agent's action; ``--env-from`` such a model runs the baselines without the hand-over;
-    bad values are one line."""
-    from safetensors import safe_open
-    from safetensors.numpy import load_file, save_file
+def test_the_steer_assist_wrapper_hands_the_last_approach_to_steer_and_bad_uses_are_one_line():
+    """``snakesim.wrappers.SteerAssist(env, near_goal=R)``: within R m of the goal, baseline:steer's
+    action drives whatever the agent asks (checked against the plain env driven by libm's steer);
+    bad values, envs it cannot drive and the env's former keys are one line."""
+    from snakesim.wrappers import SteerAssist
 
-    source = ROOT / "models" / "goal-10.safetensors"
-    with safe_open(str(source), "np") as f:
-        meta = dict(f.metadata())
-    recorded = json.loads(meta["env_config"])
-    recorded["action"]["steer_near_goal"] = 10.0
-    recorded["goal_distribution"]["distance"] = [5.0, 9.0]  # every goal within the hand-over
-    model = tmp_path / "handed-goal-10.safetensors"
-    save_file(load_file(str(source)), str(model), metadata={**meta, "env_config": json.dumps(recorded)})
-
-    agent, baseline = load_agent(str(model)), load_agent("baseline:steer", env_from=str(model))
-    assert agent.env_kwargs["action"]["steer_near_goal"] == 10.0
-    assert "steer_near_goal" not in baseline.env_kwargs["action"]
-    assert {**baseline.env_kwargs, "action": None} == {**agent.env_kwargs, "action": None}
-
-    # Every goal lies within 10 m: whatever the action, the env steps as the plain one driven by steer's
-    # action, clip(-atan2(gx, -gy), -1, 1) computed as the env computes it (libm's float32 arctangent,
-    # which numpy's can differ from in the last bit).
-    libm = ctypes.CDLL(ctypes.util.find_library("m"))
-    libm.atan2f.restype = ctypes.c_float
-    libm.atan2f.argtypes = (ctypes.c_float, ctypes.c_float)
-    handed = snakesim.envs.env.make_env(**agent.env_kwargs)
-    plain = snakesim.envs.env.make_env(**baseline.env_kwargs)
+    kwargs = {"joints": 10, "action": {"mode": "gait"}, "observation": "extended"}
+    kwargs["goal_distribution"] = {"distance": [5.0, 9.0]}  # every goal within the hand-over
+    handed = SteerAssist(gymnasium.make("snakesim/SnakeGoal-v0", **kwargs), near_goal=10.0)
+    plain = gymnasium.make("snakesim/SnakeGoal-v0", **kwargs)
+    assert handed.action_space == plain.action_space
     for seed, action in ((3, [1.0, -1.0, 1.0]), (4, [-1.0, 1.0, -0.5])):
         obs_h, _ = handed.reset(seed=seed)
         obs_p, _ = plain.reset(seed=seed)
         for _ in range(30):
             np.testing.assert_array_equal(obs_h, obs_p)
-            gx, gy = obs_p[22:24]
-            assert np.hypot(gx, gy) < 10
-            steer = np.clip(-np.float32(libm.atan2f(gx, -gy)), -1, 1)
+            assert np.hypot(*obs_p[22:24]) < 10
             obs_h, *_ = handed.step(np.array(action, np.float32))
-            obs_p, *_ = plain.step(np.array([steer, 0, 0], np.float32))
+            obs_p, *_ = plain.step(np.array([_libm_steer(obs_p), 0, 0], np.float32))
         # The action itself would have driven elsewhere.
         handed.reset(seed=seed)
         plain.reset(seed=seed)
@@ -446,14 +429,73 @@ def test_near_the_goal_steer_drives_and_the_baselines_run_without_the_hand_over(
         obs_q, *_ = plain.step(np.array(action, np.float32))
         assert not np.array_equal(obs_q, obs_h)
 
-    for action, kind, message in (
-        ({"mode": "joints", "steer_near_goal": 2.0}, ValueError, "steer_near_goal: needs action mode 'gait'"),
-        ({"mode": "gait", "steer_near_goal": 11.0}, ValueError, r"steer_near_goal: must be in \[0, 10\] m"),
-        ({"mode": "gait", "steer_near_goal": "near"}, TypeError, "action.steer_near_goal: invalid type"),
+    goal = gymnasium.make("snakesim/SnakeGoal-v0", joints=5)
+    for assist, kind, message in (
+        ({"near_goal": 11.0}, ValueError, r"steer_assist.near_goal: must be in \[0, 10\] m"),
+        ({"near_goal": float("nan")}, ValueError, "steer_assist.near_goal: must be in"),
+        ({"near_goal": "near"}, ValueError, "steer_assist: invalid type"),
+        ({}, ValueError, "steer_assist: set residual: true, near_goal: METRES or both"),
+        ({"residual": "yes"}, TypeError, "residual must be True or False"),
     ):
         with pytest.raises(kind, match=message) as error:
-            snakesim.SnakeGoalEnv(joints=10, action=action)
+            SteerAssist(goal, **assist)
         assert "\n" not in str(error.value)
+    with pytest.raises(ValueError, match="need action mode 'gait' and observation 'extended' or 'terrain'"):
+        SteerAssist(
+            gymnasium.make("snakesim/SnakeGoal-v0", joints=5, action={"mode": "joints"}), residual=True
+        )
+    with pytest.raises(ValueError, match=r"action.steer_near_goal: baseline:steer left the env"):
+        snakesim.SnakeGoalEnv(joints=10, action={"mode": "gait", "steer_near_goal": 2.0})
+
+
+def test_a_native_run_with_steer_assist_records_it_and_its_model_acts_through_it(tmp_path, capsys):
+    """``steer_assist`` in a run configuration: the native trainer applies it, the model records it
+    (metadata ``steer_assist``), and loading the model applies it again; the SB3 trainer refuses it."""
+    import yaml
+    from safetensors import safe_open
+
+    config = {
+        "joints": 4,
+        "n_envs": 2,
+        "timesteps": 256,
+        "eval_freq": 0,
+        "eval_episodes": 2,
+        "checkpoint_freq": 0,
+        "threads": 1,
+        "ppo": {"n_steps": 64, "batch_size": 64, "n_epochs": 1},
+        "env": {"task": "goal", "max_episode_steps": 50},
+        "steer_assist": {"near_goal": 10.0},
+    }
+    path = tmp_path / "assist.yaml"
+    path.write_text(yaml.safe_dump(config))
+    run = tmp_path / "run"
+    assert cli_main(["train", "--config", str(path), "--run-dir", str(run), "--no-progress"]) == 0
+    with safe_open(str(run / "model.safetensors"), "np") as f:
+        meta = f.metadata()
+    assert json.loads(meta["steer_assist"]) == {"residual": False, "near_goal": 10.0}
+    assert "within 10 m of the goal baseline:steer drives" in meta["action"]
+    agent = load_agent(str(run / "model.safetensors"))
+    assert agent.steer_assist is not None and agent.steer_assist.near_goal == 10.0
+    # Every goal of a 50-step episode lies within 10 m of the head, so steer drives every step.
+    env = snakesim.envs.env.make_env(**agent.env_kwargs)
+    at = env.observation_structure["base_position"] + env.observation_structure["joint_states"]
+    obs, _ = env.reset(seed=1)
+    for _ in range(20):
+        if np.hypot(*obs[at : at + 2]) < 10:
+            np.testing.assert_array_equal(agent.act(obs[None, :])[0], [_steer_of(obs, at), 0.0, 0.0])
+        obs, *_ = env.step(agent.act(obs[None, :])[0])
+
+    path.write_text(yaml.safe_dump({**config, "trainer": "sb3"}))
+    assert cli_main(["train", "--config", str(path), "--run-dir", str(tmp_path / "sb3")]) != 0
+    assert "steer_assist: only the native trainer applies it" in capsys.readouterr().err
+
+
+def _steer_of(obs: np.ndarray, at: int) -> np.float32:
+    libm = ctypes.CDLL(ctypes.util.find_library("m"))
+    libm.atan2f.restype = ctypes.c_float
+    libm.atan2f.argtypes = (ctypes.c_float, ctypes.c_float)
+    gx, gy = obs[at : at + 2]
+    return np.clip(-np.float32(libm.atan2f(gx, -gy)), -1, 1)
 
 
 def test_a_larger_height_map_sees_farther_and_bad_maps_are_one_line():

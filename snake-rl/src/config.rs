@@ -21,7 +21,7 @@ use serde::de::{self, Deserializer};
 use serde::{Deserialize, Serialize, Serializer};
 use serde_json::{Map, Value};
 use snake_core::env::Task;
-use snake_core::{EnvConfig, Preset};
+use snake_core::{EnvConfig, Preset, SteerAssist};
 
 use crate::nn::Arch;
 
@@ -314,6 +314,12 @@ pub struct RunConfig {
     /// first timestep count, rises linearly to the configured weight at the second and stays there
     /// (null: the configured weight throughout). Evaluations always use the configured weight.
     pub energy_ramp: Option<[u64; 2]>,
+    /// Native trainer: `baseline:steer` shares the agent's gait actions (`{residual: true}`,
+    /// `{near_goal: METRES}` or both; [`SteerAssist`]), between the policy and the envs of training
+    /// and evaluation; recorded in the model and applied again wherever the model is loaded (null:
+    /// none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steer_assist: Option<SteerAssist>,
     /// PPO's hyperparameters.
     pub ppo: PpoConfig,
     /// More env keywords, as `snakesim.SnakeEnv` takes them (goal, goal_radius, max_episode_steps,
@@ -341,6 +347,7 @@ impl Default for RunConfig {
             torch_threads: None,
             threads: None,
             energy_ramp: None,
+            steer_assist: None,
             ppo: PpoConfig::default(),
             env: Map::new(),
         }
@@ -359,8 +366,17 @@ pub const IDENTITY_KEYS: &[&str] = &[
     "eval_seed",
     "normalize",
     "energy_ramp",
+    "steer_assist",
     "ppo",
     "env",
+];
+
+/// The env's former `action` keys of the steering assist and the [`SteerAssist`] keys they became:
+/// a run configuration with them gets an error saying where they went, a model recorded with them
+/// is read with its assist (`model::take_legacy_assist`).
+pub const LEGACY_ASSIST_KEYS: [(&str, &str); 2] = [
+    ("steer_residual", "residual"),
+    ("steer_near_goal", "near_goal"),
 ];
 
 /// Offset of the default evaluation seed from the training seed.
@@ -499,6 +515,17 @@ pub fn env_config(
             return Err(err(format!(
                 "{}: set {key} at the top level, not in the env table",
                 at(key)
+            )));
+        }
+    }
+    if let Some(Value::Object(action)) = table.get("action") {
+        if let Some((old, new)) = LEGACY_ASSIST_KEYS
+            .iter()
+            .find(|(old, _)| action.contains_key(*old))
+        {
+            return Err(err(format!(
+                "{}: baseline:steer left the env: set `steer_assist: {{{new}: ...}}` at the run's top level, or wrap the env in snakesim.wrappers.SteerAssist({new}=...)",
+                at(&format!("action.{old}"))
             )));
         }
     }
@@ -751,6 +778,14 @@ impl RunConfig {
                     "energy_ramp: only the native trainer anneals the energy weight (trainer: native)",
                 ));
             }
+        }
+        if let Some(assist) = self.steer_assist {
+            if self.trainer != TrainerKind::Native {
+                return Err(err(
+                    "steer_assist: only the native trainer applies it (trainer: native)",
+                ));
+            }
+            assist.bind(&env).map_err(|e| err(e.message()))?;
         }
         let row_bytes = 4 * (env.observation_dim() + env.action_dim() + 8) as u64;
         if rollout.saturating_mul(row_bytes) > MAX_ROLLOUT_BYTES {

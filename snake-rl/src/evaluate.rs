@@ -154,7 +154,7 @@ pub enum EvalError {
 }
 
 /// What acts in an evaluation: given the observations of `m` envs (row-major, `m x obs_dim`), writes
-/// their actions (`m x action_dim`; `A` is f32 for the native policy, f64 for Python's actors, whose
+/// their actions (`m x action_dim`; `A` is f64 for the native policy (its env actions) and for Python's actors, whose
 /// actions the env takes as they are).
 pub type Actor<'a, A> = dyn FnMut(&[f32], usize, &mut [A]) -> Result<(), EvalError> + 'a;
 
@@ -171,8 +171,9 @@ pub fn run_episodes(
     stop: &mut dyn FnMut() -> bool,
 ) -> Result<Vec<Episode>, EvalError> {
     let mut rng = ChaCha12Rng::seed_from_u64(seed);
-    let mut act = |obs: &[f32], m: usize, actions: &mut [f32]| {
-        policy.act(obs, m, deterministic, &mut rng, actions);
+    // float64: the actions the env is given, the policy's own (float32 values) or its assist's.
+    let mut act = |obs: &[f32], m: usize, actions: &mut [f64]| {
+        policy.env_actions(obs, m, deterministic, &mut rng, actions);
         Ok(())
     };
     run_episodes_with(&mut act, config, episodes, seed, pool, stop)

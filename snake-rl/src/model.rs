@@ -15,6 +15,7 @@
 //! | `env_config` | the complete resolved env configuration (JSON); on loading, values the `env` keywords now resolve differently are pinned to it (`pin_recorded_env`) |
 //! | `observation` | the observation layout (`paper`, `extended`, `terrain`) |
 //! | `action` | the action layout: `N joint targets in [-1, 1] x action_scale rad, head to tail` |
+//! | `steer_assist` | present when `baseline:steer` shares the policy's actions: the assist (JSON, [`SteerAssist`]), applied between the policy and the env wherever the model acts |
 //! | `normalize` | `true` when observations are normalised with `obs_rms` (clip 10, eps 1e-8) |
 //! | `timesteps` | timesteps trained |
 //!
@@ -29,7 +30,7 @@ use std::path::Path;
 use rand_chacha::ChaCha12Rng;
 use safetensors::{Dtype, SafeTensors};
 use serde_json::{Map, Value};
-use snake_core::{EnvConfig, Preset};
+use snake_core::{EnvConfig, Preset, SteerAssist};
 
 use crate::nn::{ActorCritic, Arch};
 use crate::normalize::{Normalizer, RunningMeanStd};
@@ -74,6 +75,8 @@ pub struct SavedPolicy {
     pub obs_rms: Option<RunningMeanStd>,
     /// The env it was trained in.
     pub env: EnvSpec,
+    /// `baseline:steer`'s share of its actions, when it was trained with one.
+    pub steer_assist: Option<SteerAssist>,
     /// Timesteps it was trained for.
     pub timesteps: u64,
 }
@@ -181,26 +184,13 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
                     c.action_scale
                 ),
                 snake_core::env::ActionMode::Gait => format!(
-                    "gait: steering {:?} rad, amplitude {:?} rad, frequency {:?} Hz, each from [-1, 1]{}{}",
+                    "gait: steering {:?} rad, amplitude {:?} rad, frequency {:?} Hz, each from [-1, 1]{}",
                     c.action.steering,
                     c.action.amplitude,
                     c.action.frequency,
-                    if c.action.steer_residual {
-                        format!(
-                            "; the steering corrects baseline:steer's: clip(steer + {} x action, -1, 1)",
-                            snake_core::env::STEER_RESIDUAL_GAIN
-                        )
-                    } else {
-                        String::new()
-                    },
-                    if c.action.steer_near_goal > 0.0 {
-                        format!(
-                            "; within {} m of the goal baseline:steer drives, whatever the action",
-                            c.action.steer_near_goal
-                        )
-                    } else {
-                        String::new()
-                    }
+                    p.steer_assist
+                        .map(|a| format!("; {}", a.describe()))
+                        .unwrap_or_default()
                 ),
                 snake_core::env::ActionMode::Residual => format!(
                     "residual: {} corrections in [-1, 1] x {} rad added to the default wave, head to tail",
@@ -208,6 +198,12 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
                     c.action.residual_scale
                 ),
             },
+        );
+    }
+    if let Some(assist) = &p.steer_assist {
+        meta.insert(
+            "steer_assist".into(),
+            serde_json::to_string(assist).expect("serialises"),
         );
     }
     if let Some(rms) = &p.obs_rms {
@@ -418,6 +414,27 @@ impl<'a> Parsed<'a> {
         let mut env: Map<String, Value> = serde_json::from_str(self.meta("env")?)
             .map_err(|e| self.error(format!("metadata 'env' is not a JSON mapping ({e})")))?;
         find_env_files(&mut env, self.path);
+        let mut recorded = match self.meta.get("env_config") {
+            None => None,
+            Some(text) => Some(
+                serde_json::from_str::<Value>(text)
+                    .ok()
+                    .filter(Value::is_object)
+                    .ok_or_else(|| self.error("metadata 'env_config' is not a JSON mapping"))?,
+            ),
+        };
+        let legacy = take_legacy_assist(&mut env, recorded.as_mut()).map_err(|e| self.error(e))?;
+        let steer_assist = match (self.meta.get("steer_assist"), legacy) {
+            (None, legacy) => legacy,
+            (Some(_), Some(_)) => {
+                return Err(
+                    self.error("it records a steer_assist and the env's former action keys of one")
+                )
+            }
+            (Some(text), None) => Some(serde_json::from_str(text).map_err(|e| {
+                self.error(format!("metadata 'steer_assist' is not an assist ({e})"))
+            })?),
+        };
         let mut spec = EnvSpec {
             joints,
             preset,
@@ -426,13 +443,14 @@ impl<'a> Parsed<'a> {
         let mut config = spec
             .config()
             .map_err(|e| self.error(format!("its env does not build: {e}")))?;
-        if let Some(recorded) = self.meta.get("env_config") {
-            let recorded: Value = serde_json::from_str(recorded)
-                .ok()
-                .filter(Value::is_object)
-                .ok_or_else(|| self.error("metadata 'env_config' is not a JSON mapping"))?;
+        if let Some(recorded) = recorded {
             (spec, config) =
                 pin_recorded_env(spec, config, &recorded).map_err(|e| self.error(e))?;
+        }
+        if let Some(assist) = steer_assist {
+            assist
+                .bind(&config)
+                .map_err(|e| self.error(format!("its steer_assist: {}", e.message())))?;
         }
         if (config.observation_dim(), config.action_dim()) != (obs_dim, act_dim) {
             return Err(self.error(format!(
@@ -468,9 +486,46 @@ impl<'a> Parsed<'a> {
             params,
             obs_rms,
             env: spec,
+            steer_assist,
             timesteps: self.parse("timesteps")?,
         })
     }
+}
+
+/// Models trained before the assist left the env record it as `action.steer_residual` and
+/// `action.steer_near_goal` of their env keywords (and of `env_config`): those are taken out of both
+/// and returned as the assist they meant, so such a model acts as it was trained.
+fn take_legacy_assist(
+    env: &mut Map<String, Value>,
+    recorded: Option<&mut Value>,
+) -> Result<Option<SteerAssist>, String> {
+    let mut assist = Map::new();
+    if let Some(Value::Object(action)) = env.get_mut("action") {
+        for (old, new) in crate::config::LEGACY_ASSIST_KEYS {
+            if let Some(v) = action.remove(old) {
+                assist.insert(new.to_owned(), v);
+            }
+        }
+    }
+    // The resolved configuration is what the model was trained in: its values win.
+    if let Some(Value::Object(action)) = recorded.and_then(|r| r.get_mut("action")) {
+        for (old, new) in crate::config::LEGACY_ASSIST_KEYS {
+            if let Some(v) = action.remove(old) {
+                assist.insert(new.to_owned(), v);
+            }
+        }
+    }
+    // Written as false and 0 when off (the keys were left out then, but a hand-edited file may have
+    // them): no assist.
+    let off = |v: &Value| v == &Value::Bool(false) || v.as_f64() == Some(0.0);
+    if assist.values().all(off) {
+        return Ok(None);
+    }
+    serde_json::from_value(Value::Object(assist))
+        .map(Some)
+        .map_err(|e| {
+            format!("its env's action.steer_residual or steer_near_goal is not valid ({e})")
+        })
 }
 
 /// The env keys that name files. A model records them as they were given to the trainer, usually

@@ -2,6 +2,7 @@
 //! the observation statistics it applies first.
 
 use rand::Rng;
+use snake_core::AssistedEnv;
 
 use crate::model::SavedPolicy;
 use crate::nn::{ActorCritic, Workspace};
@@ -20,6 +21,10 @@ pub struct Policy {
     obs: Vec<f32>,
     values: Vec<f32>,
     log_probs: Vec<f32>,
+    /// `baseline:steer`'s share of the env's actions, when the policy was trained with one.
+    assist: Option<AssistedEnv>,
+    /// The policy's own actions before the assist.
+    own_actions: Vec<f32>,
 }
 
 impl Policy {
@@ -34,7 +39,16 @@ impl Policy {
             obs: Vec::new(),
             values: Vec::new(),
             log_probs: Vec::new(),
+            assist: None,
+            own_actions: Vec::new(),
         }
+    }
+
+    /// The policy with `baseline:steer` sharing the actions its env is given
+    /// ([`Policy::env_actions`]).
+    pub fn with_assist(mut self, assist: Option<AssistedEnv>) -> Self {
+        self.assist = assist;
+        self
     }
 
     /// The policy of a saved model.
@@ -104,6 +118,31 @@ impl Policy {
                 *a = a.clamp(-1.0, 1.0);
             }
         }
+    }
+
+    /// The actions the env is given for `rows` raw observations (`rows x act_dim`): the policy's
+    /// own ([`Policy::act`]), or with its assist, the assist's composition of them.
+    pub fn env_actions<R: Rng>(
+        &mut self,
+        obs: &[f32],
+        rows: usize,
+        deterministic: bool,
+        rng: &mut R,
+        actions: &mut [f64],
+    ) {
+        let n = rows * self.net.act_dim();
+        let mut own = std::mem::take(&mut self.own_actions);
+        own.resize(n, 0.0);
+        self.act(obs, rows, deterministic, rng, &mut own);
+        match &self.assist {
+            Some(assist) => assist.apply(obs, &own, rows, actions),
+            None => {
+                for (a, o) in actions[..n].iter_mut().zip(&own) {
+                    *a = f64::from(*o);
+                }
+            }
+        }
+        self.own_actions = own;
     }
 
     /// Values of `rows` raw observations.

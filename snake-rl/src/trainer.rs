@@ -17,7 +17,7 @@ use std::time::Instant;
 use rand::SeedableRng;
 use rand_chacha::ChaCha12Rng;
 use serde_json::{json, Map, Value};
-use snake_core::{EnvConfig, StepBuffers, VecSnakeEnv};
+use snake_core::{AssistedEnv, EnvConfig, StepBuffers, VecSnakeEnv};
 
 use crate::buffer::RolloutBuffer;
 use crate::config::{RunConfig, TrainerKind};
@@ -361,6 +361,8 @@ pub fn train_prepared(
 struct Run {
     config: RunConfig,
     env_config: EnvConfig,
+    /// The run's `steer_assist`, bound to its env: between the policy and the envs.
+    assist: Option<AssistedEnv>,
     dir: RunDir,
     threads: usize,
     learner: Learner,
@@ -391,6 +393,13 @@ impl Run {
         checkpoint: Option<Checkpoint>,
     ) -> Result<Self, TrainError> {
         let env_config = config.env_config().map_err(|e| TrainError::Setup(e.0))?;
+        let assist = match config.steer_assist {
+            None => None,
+            Some(a) => Some(
+                a.bind(&env_config)
+                    .map_err(|e| TrainError::Setup(e.message()))?,
+            ),
+        };
         let (obs_dim, act_dim) = (env_config.observation_dim(), env_config.action_dim());
         let net = ActorCritic::new(config.arch.clone(), obs_dim, act_dim);
         let tb = EventWriter::create(&dir.tensorboard_dir()).map_err(|e| {
@@ -444,6 +453,7 @@ impl Run {
         };
         Ok(Run {
             env_config,
+            assist,
             dir,
             threads,
             learner,
@@ -480,6 +490,7 @@ impl Run {
                 preset: self.config.preset,
                 env: self.config.env.clone(),
             },
+            steer_assist: self.config.steer_assist,
             timesteps: self.timesteps,
         }
     }
@@ -528,7 +539,8 @@ impl Run {
             self.learner.net().clone(),
             self.learner.params.clone(),
             self.normalizer.as_ref().map(|n| n.obs_rms.clone()),
-        );
+        )
+        .with_assist(self.assist);
         let episodes = match run_episodes(
             &mut policy,
             &self.env_config,
@@ -692,6 +704,7 @@ impl Run {
             episode_starts: vec![true; m],
             actions: vec![0.0; m * n],
             clipped: vec![0.0; m * n],
+            env_actions: vec![0.0; if self.assist.is_some() { m * n } else { 0 }],
             values: vec![0.0; m],
             log_probs: vec![0.0; m],
             rewards: vec![0.0; m],
@@ -734,7 +747,14 @@ impl Run {
                 &mut r.log_probs,
             );
             act::clip_to_action_space(&r.actions, &mut r.clipped);
-            let finals = r.envs.step_into(&r.clipped, &mut r.out)?;
+            let finals = match &self.assist {
+                None => r.envs.step_into(&r.clipped, &mut r.out)?,
+                Some(assist) => {
+                    // The observations the actions answer are the envs' raw ones, still in `out`.
+                    assist.apply(&r.out.obs, &r.clipped, m, &mut r.env_actions);
+                    r.envs.step_into(&r.env_actions, &mut r.out)?
+                }
+            };
             self.timesteps += m as u64;
             for i in 0..m {
                 r.rewards[i] = r.out.rewards[i] as f32;
@@ -921,6 +941,8 @@ struct Rollout {
     episode_starts: Vec<bool>,
     actions: Vec<f32>,
     clipped: Vec<f32>,
+    /// With a `steer_assist`, the envs' actions (the assist's composition of `clipped`).
+    env_actions: Vec<f64>,
     values: Vec<f32>,
     log_probs: Vec<f32>,
     /// The rewards as stored (float32, normalised with `normalize`, bootstrapped on truncation).

@@ -16,14 +16,6 @@ pub const MAX_GAIT_FREQUENCY: f64 = 2.0;
 pub const MAX_GAIT_STEERING: f64 = 0.8;
 /// Largest per-joint correction of the residual mode, radians.
 pub const MAX_RESIDUAL_SCALE: f64 = 1.5;
-/// With [`ActionConfig::steer_residual`], the steering action's weight in the sum
-/// `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`: 2, so that whatever `baseline:steer` asks
-/// (at most 1 either way), the action can still reach any steering.
-pub const STEER_RESIDUAL_GAIN: f64 = 2.0;
-/// Largest [`ActionConfig::steer_near_goal`], metres: the tasks draw their goals 4-15 m away, so a
-/// hand-over from further off would have steer drive most episodes from their start.
-pub const MAX_STEER_NEAR_GOAL: f64 = 10.0;
-
 /// What an action sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -76,29 +68,6 @@ pub struct ActionConfig {
     pub frequency: [f64; 2],
     /// Residual mode: the largest correction added to the wave's target, radians (0.3).
     pub residual_scale: f64,
-    /// Gait mode (false): the steering action corrects `baseline:steer`'s steering instead of
-    /// setting it (residual policy learning: the policy starts as the hand controller and learns
-    /// where to depart from it). The steering is `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`,
-    /// `steer = clip(-bearing, -1, 1)` with the goal's bearing read from the observation the
-    /// action answers (radians, 0 ahead, positive to the left), as `baseline:steer` reads it; so
-    /// actions of 0 drive exactly `baseline:steer`. Needs an observation with the goal vector
-    /// (`extended` or `terrain`). Left out of written configurations while false.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub steer_residual: bool,
-    /// Gait mode, metres (0: off): within this distance of the goal (the observation's goal
-    /// vector) `baseline:steer` drives, whatever the action: the steering is `clip(-bearing, -1,
-    /// 1)` as with `steer_residual`, and amplitude and frequency are the middle of their ranges
-    /// (actions of 0), as `baseline:steer` sets them. A hand-over: the policy finds the way, the
-    /// hand controller makes the last approach. Needs an observation with the goal vector
-    /// (`extended` or `terrain`); at most [`MAX_STEER_NEAR_GOAL`]. Left out of written
-    /// configurations while 0.
-    #[serde(skip_serializing_if = "is_zero")]
-    pub steer_near_goal: f64,
-}
-
-/// serde's `skip_serializing_if` for a distance that is off at 0.
-fn is_zero(v: &f64) -> bool {
-    *v == 0.0
 }
 
 impl Default for ActionConfig {
@@ -109,8 +78,6 @@ impl Default for ActionConfig {
             amplitude: [0.2, 0.6],
             frequency: [0.4, 1.0],
             residual_scale: 0.3,
-            steer_residual: false,
-            steer_near_goal: 0.0,
         }
     }
 }
@@ -150,12 +117,6 @@ impl ActionConfig {
                 self.frequency[0], self.frequency[1]
             )));
         }
-        let near = self.steer_near_goal;
-        if !(near.is_finite() && (0.0..=MAX_STEER_NEAR_GOAL).contains(&near)) {
-            return Err(invalid(format!(
-                "action.steer_near_goal must be in [0, {MAX_STEER_NEAR_GOAL}] m, got {near}"
-            )));
-        }
         let r = self.residual_scale;
         if !(r.is_finite() && (0.0..=MAX_RESIDUAL_SCALE).contains(&r)) {
             return Err(invalid(format!(
@@ -164,20 +125,6 @@ impl ActionConfig {
         }
         Ok(())
     }
-}
-
-/// `baseline:steer`'s steering action for the goal vector (gx, gy) of an extended or terrain
-/// observation (its `goal_vector` part, [`goal_vector`]): `clip(-atan2(gx, -gy), -1, 1)` in the head
-/// frame (its -y ahead, +x to the left), in `float32` as the Python baseline computes it from the
-/// same values (`snakesim.agents.baselines`), so that a zero correction drives it step for step.
-pub(crate) fn goal_steering((gx, gy): (f32, f32)) -> f64 {
-    f64::from((-gx.atan2(-gy)).clamp(-1.0, 1.0))
-}
-
-/// The goal vector (gx, gy) of an observation whose `goal_vector` part starts at `at`, metres in
-/// the head frame.
-fn goal_vector(obs: &[f32], at: usize) -> (f32, f32) {
-    (obs[at], obs[at + 1])
 }
 
 /// `low + (high - low) * (a + 1) / 2` for `a` in [-1, 1].
@@ -231,13 +178,6 @@ pub(crate) struct Driver {
     wave: Wave,
     /// The clipped action of the current env step.
     action: Vec<f64>,
-    /// With `steer_residual` or `steer_near_goal`: `baseline:steer`'s steering for the last
-    /// observation.
-    goal_steering: f64,
-    /// With `steer_near_goal`: whether the last observation's goal lies within it.
-    near_goal: bool,
-    /// Where the observation's `goal_vector` part starts (`None` in the paper layout, which lacks it).
-    goal_at: Option<usize>,
 }
 
 impl Driver {
@@ -267,11 +207,6 @@ impl Driver {
             wave,
             // Sized once: stepping stays allocation-free.
             action: Vec::with_capacity(config.action_dim()),
-            goal_steering: 0.0,
-            near_goal: false,
-            goal_at: config
-                .observation_structure()
-                .offset(super::ObservationPart::GoalVector),
         }
     }
 
@@ -281,39 +216,14 @@ impl Driver {
         self.action.clear();
     }
 
-    /// With `steer_residual` or `steer_near_goal`, what `baseline:steer` would steer for the
-    /// observation just written (`obs`, of an extended or terrain layout) and whether its goal is
-    /// near; a no-op otherwise.
-    pub fn observe(&mut self, obs: &[f32]) {
-        let near = self.config.steer_near_goal;
-        let Some(at) = self.goal_at else { return };
-        if self.config.steer_residual || near > 0.0 {
-            self.goal_steering = goal_steering(goal_vector(obs, at));
-        }
-        if near > 0.0 {
-            let (gx, gy) = goal_vector(obs, at);
-            self.near_goal = f64::from(gx).hypot(f64::from(gy)) < near;
-        }
-    }
-
     /// Takes this env step's action, clipped to [-1, 1] (finite values; checked by the caller).
     pub fn set_action(&mut self, action: impl Iterator<Item = f64>) {
         self.action.clear();
         self.action.extend(action.map(|a| a.clamp(-1.0, 1.0)));
         if self.config.mode == ActionMode::Gait {
             let c = &self.config;
-            let [steering_action, amplitude_action, frequency_action] = if self.near_goal {
-                // The hand-over: baseline:steer's action.
-                [self.goal_steering, 0.0, 0.0]
-            } else if c.steer_residual {
-                [
-                    (self.goal_steering + STEER_RESIDUAL_GAIN * self.action[0]).clamp(-1.0, 1.0),
-                    self.action[1],
-                    self.action[2],
-                ]
-            } else {
-                [self.action[0], self.action[1], self.action[2]]
-            };
+            let [steering_action, amplitude_action, frequency_action] =
+                [self.action[0], self.action[1], self.action[2]];
             let steering = lerp(c.steering, steering_action);
             let amplitude = lerp(c.amplitude, amplitude_action);
             let frequency = lerp(c.frequency, frequency_action);

@@ -644,19 +644,6 @@ impl EnvConfig {
                 self.observation.name()
             )));
         }
-        let steered_by = [
-            ("steer_residual", self.action.steer_residual),
-            ("steer_near_goal", self.action.steer_near_goal > 0.0),
-        ];
-        for (key, on) in steered_by {
-            if on && !(self.action.mode == ActionMode::Gait && self.observation.is_extended()) {
-                return Err(invalid(format!(
-                    "action.{key} needs action mode 'gait' and observation 'extended' or 'terrain' (baseline:steer reads the goal vector), got '{}' and '{}'",
-                    self.action.mode.name(),
-                    self.observation.name()
-                )));
-            }
-        }
         if !(self.action_scale.is_finite()
             && self.action_scale > 0.0
             && self.action_scale <= MAX_ACTION_SCALE)

@@ -2,6 +2,6 @@
 
 from __future__ import annotations
 
-from snakesim.envs.wrappers import RerunLogger
+from snakesim.envs.wrappers import RerunLogger, SteerAssist
 
-__all__ = ["RerunLogger"]
+__all__ = ["RerunLogger", "SteerAssist"]

@@ -17,16 +17,17 @@ from typing import Any
 
 import numpy as np
 
+from snakesim import _core
 from snakesim.envs.config import observation_slice
 
-#: The controllers by name.
-NAMES = ("gait", "steer")
+#: The controllers by name (snake-core's ``HandController::ALL``).
+NAMES = tuple(_core.hand_controller_names())
 
 
 def goal_bearing(obs: np.ndarray, structure: Mapping[str, int]) -> np.ndarray:
-    """The goal's bearing from the head, radians (0 ahead, positive to the left), per row of ``obs``,
-    from its ``goal_vector`` (the extended and terrain layouts; ``structure`` is the env's
-    ``observation_structure``)."""
+    """The goal's bearing from the head, radians (0 ahead, positive to the left), per row of
+    ``obs``, from its ``goal_vector`` (the extended and terrain layouts; ``structure`` is the env's
+    ``observation_structure``): for experiments with variants of steer (other gains, targets)."""
     goal = observation_slice(structure, "goal_vector")
     gx, gy = obs[:, goal.start], obs[:, goal.start + 1]
     # The head frame's -y points ahead and its +x to the left.
@@ -34,46 +35,24 @@ def goal_bearing(obs: np.ndarray, structure: Mapping[str, int]) -> np.ndarray:
 
 
 class Controller:
-    """``act(obs_batch) -> actions`` of a named baseline for observations of ``structure`` (the env's
-    ``observation_structure``)."""
+    """``act(obs_batch) -> actions`` of the named baseline in the env of ``env_kwargs`` (SnakeEnv's
+    keywords): snake-core's ``HandController``, the one implementation, which also drives
+    ``steer_assist`` (:class:`snakesim.wrappers.SteerAssist`). Actions are float64, the values
+    the env is given."""
 
-    def __init__(self, name: str, structure: Mapping[str, int]) -> None:
+    def __init__(self, name: str, env_kwargs: Mapping[str, Any]) -> None:
+        from snakesim.envs.config import env_config
+
         if name not in NAMES:
             raise ValueError(f"unknown baseline {name!r} (expected one of: {', '.join(NAMES)})")
-        self.name, self.structure = name, dict(structure)
+        self.name, self._config = name, env_config(**env_kwargs)
+        # Checks the env once (gait actions, the goal vector), with the core's message.
+        dim = _core.Env(self._config).observation_dim
+        _core.hand_actions(name, self._config, np.zeros((0, dim), np.float32))
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
-        obs = np.atleast_2d(np.asarray(obs, dtype=np.float32))
-        actions = np.zeros((obs.shape[0], 3), dtype=np.float32)
-        if self.name == "steer":
-            actions[:, 0] = np.clip(-goal_bearing(obs, self.structure), -1.0, 1.0)
-        return actions
+        obs = np.ascontiguousarray(np.atleast_2d(np.asarray(obs, dtype=np.float32)))
+        return _core.hand_actions(self.name, self._config, obs)
 
 
-# The action keys that put baseline:steer into an agent's env; a hand-made controller drives
-# without them.
-_STEER_KEYS = ("steer_residual", "steer_near_goal")
-
-
-def plain_gait(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
-    """``env_kwargs`` for a hand-made controller: where an agent's steering corrects steer's
-    (``action.steer_residual``) or steer takes over near the goal (``action.steer_near_goal``), the
-    controller sets the steering itself, so it drives the plain gait in the same episodes (the
-    layouts and goals come from the seeds, not the actions)."""
-    kwargs = dict(env_kwargs)
-    action = kwargs.get("action")
-    if isinstance(action, Mapping) and any(action.get(k) for k in _STEER_KEYS):
-        kwargs["action"] = {k: v for k, v in action.items() if k not in _STEER_KEYS}
-    return kwargs
-
-
-def check_env(config: dict[str, Any]) -> None:
-    """Raises ValueError unless the resolved env ``config`` has what the baselines need."""
-    if config["action"]["mode"] != "gait" or config["observation"] not in ("extended", "terrain"):
-        raise ValueError(
-            "the baselines need action mode 'gait' and observation 'extended' or 'terrain', got "
-            f"{config['action']['mode']!r} and {config['observation']!r}"
-        )
-
-
-__all__ = ["NAMES", "Controller", "check_env", "goal_bearing", "plain_gait"]
+__all__ = ["NAMES", "Controller", "goal_bearing"]

@@ -74,6 +74,9 @@ class Agent:
     kind: str = "sb3"
     # The files it was read from (model, config.yaml, statistics): what a command must not overwrite.
     files: tuple[str, ...] = ()
+    # baseline:steer's share of its actions (a _core.SteerAssist), when it was trained with one:
+    # applied in act, so whatever steps the env with act's actions runs the agent as it was trained.
+    steer_assist: Any = None
 
     @property
     def joints(self) -> int:
@@ -97,8 +100,18 @@ class Agent:
         return f"{self.joints} joints" if not robot else f"robot {robot} ({self.joints} joints)"
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
+        """The env's actions for a batch of observations: the policy's own, or with a
+        ``steer_assist``, its composition of them (float64)."""
         if self.kind == "baseline":
             return self.policy.act(obs)
+        actions = self.own_actions(obs, deterministic)
+        if self.steer_assist is None:
+            return actions
+        obs = np.ascontiguousarray(np.atleast_2d(obs), dtype=np.float32)
+        return self.steer_assist.apply(obs, np.atleast_2d(actions))
+
+    def own_actions(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
+        """The policy's own actions (before any ``steer_assist``), in [-1, 1]."""
         if self.kind == "native":
             # The native policy normalises observations itself (with its saved statistics).
             return self.policy.act(np.ascontiguousarray(obs, dtype=np.float32), deterministic)
@@ -112,6 +125,24 @@ class Agent:
 BASELINE_PREFIX = "baseline:"
 #: The entry of an SB3 zip's ``data`` where ``snakesim export`` records the env keywords (plain JSON).
 EXPORTED_ENV_KEY = "snakesim_env_kwargs"
+#: The entry where it records a native model's ``steer_assist`` (plain JSON), when it has one.
+EXPORTED_ASSIST_KEY = "snakesim_steer_assist"
+
+
+def bind_assist(where: Path | str, assist: Any, env_kwargs: Mapping[str, Any]) -> Any:
+    """A recorded ``steer_assist`` (JSON text or a mapping) bound to the env of ``env_kwargs`` (a
+    ``_core.SteerAssist``), or None when there is none."""
+    from snakesim import _core
+    from snakesim.envs.config import env_config
+
+    if assist is None:
+        return None
+    text = assist if isinstance(assist, str) else json.dumps(assist)
+    try:
+        return _core.SteerAssist(text, env_config(**env_kwargs))
+    except (TypeError, ValueError) as error:
+        raise AgentError(f"{where}: {error}") from None
+
 
 # Largest observation or action length a model may declare (a snake of MAX_JOINTS joints has ~1000).
 _MAX_SPACE_SIZE = LIMITS["space_size"]
@@ -325,6 +356,7 @@ def _read_native(
         config=located.config,
         kind="native",
         files=located.files,
+        steer_assist=bind_assist(located.model, policy.steer_assist_json(), env_kwargs),
     )
 
 
@@ -367,6 +399,7 @@ def _read_sb3(
         obs_normalizer=normalizer,
         config=located.config,
         files=located.files,
+        steer_assist=bind_assist(model, archive.data.get(EXPORTED_ASSIST_KEY), env_kwargs),
     )
 
 
@@ -632,7 +665,6 @@ def _load_baseline(
     ``env_from`` (a model or a run directory)."""
     from snakesim.agents import baselines
     from snakesim.envs.config import GOAL_ENV_DEFAULTS
-    from snakesim.envs.env import make_env
 
     files: tuple[str, ...] = ()
     if env_from is not None:
@@ -641,7 +673,8 @@ def _load_baseline(
         if isinstance(env_from, str) and env_from.startswith(BASELINE_PREFIX):
             raise AgentError(f"--env-from needs a model or a run directory, not {env_from}")
         source = load_agent(env_from)
-        env_kwargs: dict[str, Any] = baselines.plain_gait({**source.env_kwargs, **(env_overrides or {})})
+        # The agent's env without its assist: the baseline sets every action itself.
+        env_kwargs: dict[str, Any] = {**source.env_kwargs, **(env_overrides or {})}
         files = source.files
     else:
         env_kwargs = {
@@ -651,9 +684,7 @@ def _load_baseline(
             **(env_overrides or {}),
         }
     try:
-        probe = make_env(**env_kwargs)
-        baselines.check_env(probe.config)
-        controller = baselines.Controller(name, probe.observation_structure)
+        controller = baselines.Controller(name, env_kwargs)
     except (TypeError, ValueError) as error:
         raise AgentError(str(error)) from None
     return Agent(

@@ -35,14 +35,9 @@ class SnakeEnv(gymnasium.Env):
     ``action["steering"]`` ([-0.5, 0.5] rad), ``action["amplitude"]`` ([0.2, 0.6] rad) and
     ``action["frequency"]`` ([0.4, 1.0] Hz), the wave's phase carried across steps; ``"residual"``,
     ``Box(-1, 1, (N,))``, pybullet snake.py's wave (0.4 rad, 1.5 s) plus ``action * residual_scale``
-    (0.3 rad) per joint. In the gait mode, ``action["steer_residual"]`` (False) makes the steering
-    action a correction to ``baseline:steer``'s: the steering is ``clip(steer + 2 * action[0], -1,
-    1)`` with ``steer = clip(-bearing, -1, 1)``, the goal's bearing read from the observation the
-    action answers (the extended or terrain one), so that zero actions drive ``baseline:steer``
-    (residual policy learning). ``action["steer_near_goal"]`` (0 m: off; at most 10) hands the
-    last approach to ``baseline:steer``: while the observation's goal vector is shorter than it,
-    the steering is steer's and amplitude and frequency the middle of their ranges, whatever the
-    action.
+    (0.3 rad) per joint. ``baseline:steer`` sharing gait actions (a correction to its steering, or
+    a hand-over near the goal) is a wrapper, not an env keyword: :class:`snakesim.wrappers.SteerAssist`
+    (a run configuration's ``steer_assist``).
 
     **Observation space**: ``Box(-inf, inf, (D,), float32)``, every value the simulator's double cast
     to float32. ``env.observation_structure`` names its parts in order, name -> size, summing to D

@@ -6,6 +6,7 @@ import json
 from typing import Any
 
 import gymnasium
+import numpy as np
 
 from snakesim.envs.env import SnakeEnv
 from snakesim.viewer.recording import MAX_SECONDS, RecordingError, SnakeLog, Trace, _rerun
@@ -123,3 +124,44 @@ class RerunLogger(gymnasium.Wrapper):
     def close(self) -> None:
         self.log.flush()
         super().close()
+
+
+class SteerAssist(gymnasium.Wrapper):
+    """``baseline:steer`` sharing the agent's gait actions (snake-core's ``SteerAssist``, the same
+    code the native trainer's ``steer_assist`` runs): with ``residual``, the agent's steering action
+    corrects steer's, ``clip(steer + 2 a, -1, 1)``, so actions of 0 drive exactly ``baseline:steer``;
+    within ``near_goal`` metres of the goal (0: off, at most 10) steer drives whatever the agent
+    asks (a hand-over for the last approach). The action and observation spaces are the env's; the
+    env is given the composed actions (float64), computed from the observation the action answers::
+
+        env = SteerAssist(gymnasium.make("snakesim/SnakeRough-v0", joints=10), near_goal=2.5)
+
+    The env needs gait actions and the goal vector (observation ``extended`` or ``terrain``).
+    """
+
+    def __init__(self, env: gymnasium.Env, *, residual: bool = False, near_goal: float = 0.0) -> None:
+        from snakesim import _core
+
+        super().__init__(env)
+        base = env.unwrapped
+        if not isinstance(base, SnakeEnv):
+            raise TypeError(f"SteerAssist wraps a snakesim env, got {type(base).__name__}")
+        if not isinstance(residual, bool):
+            raise TypeError(f"residual must be True or False, got {residual!r}")
+        spec = json.dumps({"residual": residual, "near_goal": near_goal})
+        self.assist = _core.SteerAssist(spec, base._config_json)
+        self._obs: np.ndarray | None = None
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        obs, info = self.env.reset(seed=seed, options=options)
+        self._obs = obs
+        return obs, info
+
+    def step(self, action: Any):
+        if self._obs is None:
+            raise gymnasium.error.ResetNeeded("call reset() before step()")
+        agent = np.asarray(action, dtype=np.float64).reshape(1, -1)
+        composed = self.assist.apply(self._obs.reshape(1, -1), agent)[0]
+        obs, reward, terminated, truncated, info = self.env.step(composed)
+        self._obs = obs
+        return obs, reward, terminated, truncated, info

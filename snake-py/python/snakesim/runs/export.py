@@ -10,6 +10,7 @@ before ``predict``. The env keywords go into the zip's ``data`` (``snakesim_env_
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 from typing import Any
@@ -35,7 +36,7 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from snakesim.agents.loading import EXPORTED_ENV_KEY
+    from snakesim.agents.loading import EXPORTED_ASSIST_KEY, EXPORTED_ENV_KEY
     from snakesim.envs.sb3 import SnakeVecEnv
     from snakesim.runs.policies import policy_kwargs
 
@@ -76,6 +77,9 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     # The env it was trained in, as plain JSON in the zip's data (snakesim reads it back; PPO.load
     # sets it as an attribute and ignores it), so the export evaluates on the native model's env.
     setattr(model, EXPORTED_ENV_KEY, dict(agent.env_kwargs))
+    if agent.steer_assist is not None:
+        # Plain JSON, as the env keywords: PPO.load users apply it with snakesim.wrappers.SteerAssist.
+        setattr(model, EXPORTED_ASSIST_KEY, json.loads(agent.steer_assist.to_json()))
     out = Path(path)
     # SB3 appends ".zip" only to a name without a suffix; the temporary file ends in .zip.
     write_atomically(out, model.save)
