@@ -465,6 +465,77 @@ int ss_change_dynamics(ss_world* w, int body, int link, const ss_dynamics* d) {
     SS_GUARD_END
 }
 
+int ss_set_mass(ss_world* w, int body, int link, double mass) {
+    if (!w) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    if (!std::isfinite(mass) || !(mass > 0)) return fail(SS_ERR_ARGUMENT, "mass must be finite and > 0");
+    double old = link == -1 ? mb->getBaseMass() : mb->getLink(link).m_mass;
+    if (!(old > 0)) return fail(SS_ERR_ARGUMENT, "a fixed base or massless link keeps its mass");
+    SS_GUARD_BEGIN
+    // processChangeDynamicsInfoCommand (PSCP 10656), CHANGE_DYNAMICS_INFO_SET_MASS on a multibody: the
+    // mass, then the inertia its collision shape gives that mass (the same call loadURDF and
+    // createMultiBody made). The fixed/dynamic switch there cannot happen: old and new masses are > 0.
+    btCollisionObject* col = link == -1 ? (btCollisionObject*)mb->getBaseCollider() : (btCollisionObject*)mb->getLinkCollider(link);
+    if (link == -1) {
+        mb->setBaseMass(mass);
+        if (col && col->getCollisionShape()) {
+            btVector3 inertia;
+            col->getCollisionShape()->calculateLocalInertia(mass, inertia);
+            mb->setBaseInertia(inertia);
+        }
+    } else {
+        mb->getLink(link).m_mass = mass;
+        if (col && col->getCollisionShape()) {
+            btVector3 inertia;
+            col->getCollisionShape()->calculateLocalInertia(mass, inertia);
+            mb->getLink(link).m_inertiaLocal = inertia;
+        }
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_get_dynamics_info(const ss_world* w, int body, int link, double* mass, double* lateral_friction,
+                         double* inertia) {
+    if (!w || !mass || !lateral_friction || !inertia) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    SS_GUARD_BEGIN
+    const btCollisionObject* col = link == -1 ? (const btCollisionObject*)mb->getBaseCollider()
+                                              : (const btCollisionObject*)mb->getLinkCollider(link);
+    *mass = link == -1 ? mb->getBaseMass() : mb->getLink(link).m_mass;
+    btVector3 in = link == -1 ? mb->getBaseInertia() : mb->getLink(link).m_inertiaLocal;
+    for (int k = 0; k < 3; ++k) inertia[k] = in[k];
+    *lateral_friction = col ? col->getFriction() : 0.0;
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_scale_skin_friction(ss_world* w, int body, int link, double factor, int* had_skin) {
+    if (!w || !had_skin) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    if (!std::isfinite(factor) || factor < 0) return fail(SS_ERR_ARGUMENT, "skin friction scale must be finite and >= 0");
+    SS_GUARD_BEGIN
+    *had_skin = 0;
+    btCollisionObject* col = link == -1 ? (btCollisionObject*)mb->getBaseCollider() : (btCollisionObject*)mb->getLinkCollider(link);
+    if (!col) return SS_OK;
+    int index = col->getUserIndex3();
+    if (index >= 0 && index < (int)w->skins.size()) {
+        snake_shim::Skin& skin = w->skins[index];
+        skin.forward *= factor;
+        skin.backward *= factor;
+        skin.transverse *= factor;
+        *had_skin = 1;
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
 int ss_set_skin_friction(ss_world* w, int body, int link, double forward, double backward, double transverse,
                          const double* axis) {
     if (!w || !axis) return fail(SS_ERR_NULL, "null argument");

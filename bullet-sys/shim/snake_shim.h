@@ -199,6 +199,21 @@ int ss_body_num_joints(const ss_world* world, int body, int* count);
 /* changeDynamics(body, link, ...); link -1 is the base. */
 int ss_change_dynamics(ss_world* world, int body, int link, const ss_dynamics* dynamics);
 
+/* changeDynamics(body, link, mass=mass): the part's mass, and its local inertia recomputed from its
+ * collision shape as pybullet does (PSCP processChangeDynamicsInfoCommand: setBaseMass / m_mass, then
+ * shape->calculateLocalInertia(mass) into setBaseInertia / m_inertiaLocal; an inertia read from a URDF
+ * file is replaced, as in pybullet). mass must be finite and > 0, and the part dynamic (mass > 0; a fixed
+ * base or a massless link is refused: pybullet would switch a base between fixed and dynamic). */
+int ss_set_mass(ss_world* world, int body, int link, double mass);
+
+/* getDynamicsInfo(body, link): mass, lateral friction and the local inertia diagonal (3 values). */
+int ss_get_dynamics_info(const ss_world* world, int body, int link, double* mass, double* lateral_friction,
+                         double* inertia);
+
+/* Multiplies the skin friction coefficients of link `link` (-1: the base) by `factor` (finite, >= 0);
+ * *had_skin is 1 if the link has skin friction, 0 if not (nothing changes then). */
+int ss_scale_skin_friction(ss_world* world, int body, int link, double factor, int* had_skin);
+
 /* Skin friction (Hu, Nirody, Scott and Shelley 2009) on link `link` (-1: the base) of `body`: a contact
  * of that link sliding with unit velocity u (relative to the other object, in the contact plane) gets the
  * friction force -N (mu_t (u.n) n + mu_a (u.t) t), t the skin axis projected into the contact plane, n the

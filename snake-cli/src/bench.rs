@@ -49,7 +49,7 @@ pub struct BenchArgs {
     /// Measure the cost of skin friction F,B,T on the built-in snake: runs with and without it,
     /// alternated, and the ratio of their step times (snakesim only).
     #[arg(long, conflicts_with = "robot", value_parser = crate::flags::parse_skin)]
-    pub skin_friction: Option<[f64; 3]>,
+    pub skin_friction: Option<SkinFriction>,
 }
 
 fn median(mut values: Vec<f64>) -> f64 {
@@ -280,8 +280,8 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if let Some(path) = &args.world {
         return bench_world(args, path);
     }
-    if let Some([f, b, t]) = args.skin_friction {
-        return bench_skin(args, SkinFriction::new(f, b, t));
+    if let Some(skin) = args.skin_friction {
+        return bench_skin(args, skin);
     }
     say!(
         "physics steps per second, one core, gait running; median of {} runs of {} steps",

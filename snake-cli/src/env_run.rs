@@ -121,15 +121,13 @@ pub fn run(args: &EnvArgs) -> Result<()> {
     let keywords = args.keywords()?;
     let config = snake_rl::config::env_from_keywords(&keywords).map_err(|e| {
         // Name the flag where one set the keyword, as the other commands do.
-        let text = e.to_string();
-        match text.split_once(':') {
-            Some(("max_episode_steps", rest)) if args.max_episode_steps.is_some() => {
-                anyhow::anyhow!("--max-episode-steps:{rest}")
-            }
-            Some(("goal", rest)) if args.goal.is_some() => anyhow::anyhow!("--goal:{rest}"),
-            Some(("joints", rest)) if args.joints.is_some() => anyhow::anyhow!("--joints:{rest}"),
-            _ => anyhow::anyhow!("{text}"),
-        }
+        let flag = match e.key() {
+            Some("max_episode_steps") if args.max_episode_steps.is_some() => "--max-episode-steps",
+            Some("goal") if args.goal.is_some() => "--goal",
+            Some("joints") if args.joints.is_some() => "--joints",
+            _ => return anyhow::anyhow!("{e}"),
+        };
+        anyhow::anyhow!("{flag}: {}", e.detail())
     })?;
     config.validate()?;
     let joints = config.joints();

@@ -36,10 +36,13 @@ pub(crate) fn parse_friction(text: &str) -> Result<[f64; 3], String> {
     }
 }
 
-pub(crate) fn parse_skin(text: &str) -> Result<[f64; 3], String> {
+/// `--skin-friction F,B,T` as the typed value, checked here once (clap's value parser): what the
+/// commands hand on is a valid [`SkinFriction`] (along the body's default axis; `--skin-axis` sets
+/// it).
+pub(crate) fn parse_skin(text: &str) -> Result<SkinFriction, String> {
     let [f, b, t] = parse_numbers::<3>(text, "F,B,T")?;
-    SkinFriction::new(f, b, t)
-        .validate(&format!("--skin-friction '{text}'"))
-        .map_err(|e| e.to_string())?;
-    Ok([f, b, t])
+    let skin = SkinFriction::new(f, b, t);
+    skin.validate(&format!("--skin-friction '{text}'"))
+        .map_err(|e| e.message())?;
+    Ok(skin)
 }

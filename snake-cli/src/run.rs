@@ -75,7 +75,7 @@ pub struct RunArgs {
     /// in place of their lateral and anisotropic friction; each is multiplied by the ground's friction
     /// (0.5, Bullet's default for the plane). For a robot it replaces the robot file's skin_friction.
     #[arg(long, value_parser = parse_skin)]
-    pub skin_friction: Option<[f64; 3]>,
+    pub skin_friction: Option<SkinFriction>,
     /// Head direction of the skin in each link's frame: x, -x, y, -y, z or -z. Default: the built-in
     /// snake's head direction (-y); for a robot, its robot file's skin axis, else x.
     #[arg(long, requires = "skin_friction", allow_hyphen_values = true)]
@@ -270,9 +270,9 @@ impl RunPlan {
                     bail!("--joints must be at least 1, got {}", args.joints);
                 }
                 let mut config = args.preset.config(args.joints);
-                config.skin_friction = args.skin_friction.map(|[f, b, t]| SkinFriction {
+                config.skin_friction = args.skin_friction.map(|skin| SkinFriction {
                     axis: args.skin_axis,
-                    ..SkinFriction::new(f, b, t)
+                    ..skin
                 });
                 config.validate()?;
                 BodyPlan::Cubes {
@@ -287,10 +287,10 @@ impl RunPlan {
                         .iter_mut()
                         .for_each(|f| *f = Some(a));
                 }
-                if let Some([f, b, t]) = args.skin_friction {
+                if let Some(skin) = args.skin_friction {
                     let skin = SkinFriction {
                         axis: args.skin_axis,
-                        ..SkinFriction::new(f, b, t)
+                        ..skin
                     };
                     spec.skin_friction.iter_mut().for_each(|s| *s = Some(skin));
                 }

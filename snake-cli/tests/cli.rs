@@ -291,7 +291,10 @@ fn bad_input_is_one_clear_line() {
         (&["run", "--start=1e18,0,0.25,0"], "at most 10000 m"),
         (&["run", "--start=1e100,0,0.25,0"], "at most 10000 m"),
         (&["run", "--start=0,0,-5,0"], "start z must be in [0, 100]"),
-        (&["run", "--joints", "100000"], "joints must be at most 128"),
+        (
+            &["run", "--joints", "100000"],
+            "joints: must be at most 128",
+        ),
         (
             &["env", "--goal", "1e308,1e308"],
             "--goal: must have |x| and |y| at most 10000",

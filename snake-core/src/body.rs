@@ -1,6 +1,7 @@
 //! [`Body`]: the simulated body of a run or an episode, the built-in snake or a URDF robot, driven
 //! through [`Simulation`] either way.
 
+use crate::world::{BodyId, World};
 use crate::{Robot, Simulation, Snake};
 
 /// A simulated body: the built-in snake of cubes or a URDF robot.
@@ -53,6 +54,46 @@ impl Body {
         match self {
             Body::Cubes(_) => None,
             Body::Robot(r) => Some(r),
+        }
+    }
+
+    /// The body's world.
+    pub fn world(&self) -> &World {
+        match self {
+            Body::Cubes(s) => s.world(),
+            Body::Robot(r) => r.world(),
+        }
+    }
+
+    /// The body's world, mutable.
+    pub fn world_mut(&mut self) -> &mut World {
+        match self {
+            Body::Cubes(s) => s.world_mut(),
+            Body::Robot(r) => r.world_mut(),
+        }
+    }
+
+    /// The body in [`Body::world`].
+    pub fn id(&self) -> BodyId {
+        match self {
+            Body::Cubes(s) => s.body(),
+            Body::Robot(r) => r.body(),
+        }
+    }
+
+    /// The ground's body in [`Body::world`].
+    pub fn ground(&self) -> BodyId {
+        match self {
+            Body::Cubes(s) => s.ground(),
+            Body::Robot(r) => r.ground(),
+        }
+    }
+
+    /// Multiplies the motor force and gains the body is driven with by these factors.
+    pub fn scale_motors(&mut self, effort: f64, kp: f64, kd: f64) {
+        match self {
+            Body::Cubes(s) => s.scale_motors(effort, kp, kd),
+            Body::Robot(r) => r.scale_motors(effort, kp, kd),
         }
     }
 }

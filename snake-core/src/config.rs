@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{invalid, Result};
+use crate::error::{invalid, invalid_at, Result};
 use crate::limits::MAX_SKIN_FRICTION;
 use crate::skin::{SkinAxis, SkinFriction};
 
@@ -133,16 +133,16 @@ impl SnakeConfig {
     /// Checks every parameter; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
         if self.joints < 1 {
-            return Err(invalid(format!(
-                "joints must be at least 1, got {}",
-                self.joints
-            )));
+            return Err(invalid_at(
+                "joints",
+                format!("must be at least 1, got {}", self.joints),
+            ));
         }
         if self.joints > MAX_JOINTS {
-            return Err(invalid(format!(
-                "joints must be at most {MAX_JOINTS}, got {}",
-                self.joints
-            )));
+            return Err(invalid_at(
+                "joints",
+                format!("must be at most {MAX_JOINTS}, got {}", self.joints),
+            ));
         }
         let positive = [
             ("half_extent", self.half_extent),
@@ -152,9 +152,10 @@ impl SnakeConfig {
         ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
-                return Err(invalid(format!(
-                    "{name} must be positive and finite, got {value}"
-                )));
+                return Err(invalid_at(
+                    name,
+                    format!("must be positive and finite, got {value}"),
+                ));
             }
         }
         let non_negative = [
@@ -166,33 +167,38 @@ impl SnakeConfig {
         ];
         for (name, value) in non_negative {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(invalid(format!(
-                    "{name} must be finite and >= 0, got {value}"
-                )));
+                return Err(invalid_at(
+                    name,
+                    format!("must be finite and >= 0, got {value}"),
+                ));
             }
         }
         if !self.gravity.is_finite() {
-            return Err(invalid(format!(
-                "gravity must be finite, got {}",
-                self.gravity
-            )));
+            return Err(invalid_at(
+                "gravity",
+                format!("must be finite, got {}", self.gravity),
+            ));
         }
         if !self
             .anisotropic_friction
             .iter()
             .all(|a| a.is_finite() && *a >= 0.0)
         {
-            return Err(invalid("anisotropic_friction must be finite and >= 0"));
+            return Err(invalid_at(
+                "anisotropic_friction",
+                "must be finite and >= 0",
+            ));
         }
-        // "skin_friction.forward must be ...": a field path, as env configs name their keys.
+        // "skin_friction.forward: must be ...": a field path, as env configs name their keys.
         if let Some((name, value)) = self
             .skin_friction
             .as_ref()
             .and_then(SkinFriction::first_bad)
         {
-            return Err(invalid(format!(
-                "skin_friction.{name} must be finite and in [0, {MAX_SKIN_FRICTION}], got {value:?}"
-            )));
+            return Err(invalid_at(
+                format!("skin_friction.{name}"),
+                format!("must be finite and in [0, {MAX_SKIN_FRICTION}], got {value:?}"),
+            ));
         }
         Ok(())
     }

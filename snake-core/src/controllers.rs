@@ -11,7 +11,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::env::{ActionMode, EnvConfig, ObservationPart};
-use crate::error::{invalid, Result};
+use crate::error::{invalid, invalid_at, Result};
 
 /// With [`SteerAssist::residual`], the agent's steering action's weight in the sum
 /// `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`: 2, so that whatever `baseline:steer` asks (at
@@ -157,13 +157,15 @@ impl SteerAssist {
     pub fn validate(&self) -> Result<()> {
         let near = self.near_goal;
         if !(near.is_finite() && (0.0..=MAX_ASSIST_NEAR_GOAL).contains(&near)) {
-            return Err(invalid(format!(
-                "steer_assist.near_goal: must be in [0, {MAX_ASSIST_NEAR_GOAL}] m, got {near}"
-            )));
+            return Err(invalid_at(
+                "steer_assist.near_goal",
+                format!("must be in [0, {MAX_ASSIST_NEAR_GOAL}] m, got {near}"),
+            ));
         }
         if !self.residual && near == 0.0 {
-            return Err(invalid(
-                "steer_assist: set residual: true, near_goal: METRES or both (as it is, it changes nothing)",
+            return Err(invalid_at(
+                "steer_assist",
+                "set residual: true, near_goal: METRES or both (as it is, it changes nothing)",
             ));
         }
         Ok(())

@@ -6,6 +6,7 @@ mod config;
 mod course;
 mod height_map;
 mod observation;
+mod randomize;
 mod reward;
 mod route;
 mod terrain;
@@ -29,6 +30,7 @@ pub use height_map::{
     HeightMap, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING, MAX_HEIGHT_MAP_SIDE,
     MAX_HEIGHT_MAP_SPACING,
 };
+pub use randomize::{Physics, Randomize, PHYSICS_STREAM};
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
@@ -265,6 +267,13 @@ pub struct SnakeEnv {
     /// The observation's parts ([`EnvConfig::observation_structure`]), derived once: every reset and
     /// step writes the observation by it.
     structure: ObservationStructure,
+    /// The physics stream ([`Randomize`]; the module `randomize` documents it), when randomizing.
+    physics_rng: Option<ChaCha12Rng>,
+    /// The physics the latest reset drew (empty without [`EnvConfig::randomize`]).
+    physics: Physics,
+    /// The delay line of `latency_steps` actions (`action_dim` values each), oldest at `delay_head`.
+    delay: Vec<f64>,
+    delay_head: usize,
 }
 
 impl SnakeEnv {
@@ -312,6 +321,10 @@ impl SnakeEnv {
             course: course::Course::default(),
             progress_distance: 0.0,
             structure,
+            physics_rng: None,
+            physics: Physics::default(),
+            delay: Vec::new(),
+            delay_head: 0,
         })
     }
 
@@ -328,6 +341,12 @@ impl SnakeEnv {
     /// steps before the failure.
     pub fn physics_trace(&self) -> Option<&PhysicsTrace> {
         self.trace.as_ref()
+    }
+
+    /// The physics the latest reset drew from [`EnvConfig::randomize`] (the given keys only; empty
+    /// without it).
+    pub fn physics(&self) -> &Physics {
+        &self.physics
     }
 
     /// The configuration.
@@ -377,6 +396,11 @@ impl SnakeEnv {
         self.episode_world.as_ref()
     }
 
+    /// The current episode's body (its world, its ground), if any.
+    pub fn body(&self) -> Option<&Body> {
+        self.snake.as_ref()
+    }
+
     /// The current episode's body, the built-in snake or a robot, if any.
     pub fn simulation(&self) -> Option<&dyn Simulation> {
         self.snake.as_ref().map(Body::sim)
@@ -406,7 +430,20 @@ impl SnakeEnv {
         }
         if let Some(seed) = seed {
             self.rng = Some(ChaCha12Rng::seed_from_u64(seed));
+            if self.config.randomize.is_some() {
+                let mut physics = ChaCha12Rng::seed_from_u64(seed);
+                physics.set_stream(PHYSICS_STREAM);
+                self.physics_rng = Some(physics);
+            }
         }
+        // The physics stream, never the main one: the start, goal and terrain are the plain env's.
+        self.physics = match &self.config.randomize {
+            None => Physics::default(),
+            Some(r) => r.draw(
+                self.physics_rng
+                    .get_or_insert_with(ChaCha12Rng::from_entropy),
+            ),
+        };
         let start = match options.start {
             Some(start) => start,
             None => {
@@ -464,6 +501,11 @@ impl SnakeEnv {
             None => Body::Cubes(Snake::in_world(&self.config.snake, start, world)?),
             Some(robot) => Body::Robot(Robot::in_world(robot.spec(), start, world)?),
         };
+        self.physics.apply(&mut body)?;
+        let k = self.physics.latency_steps.unwrap_or(0) as usize;
+        self.delay.clear();
+        self.delay.resize(k * self.config.action_dim(), 0.0);
+        self.delay_head = 0;
         let snake = body.sim_mut();
         // The paper steps once before the first observation.
         snake.step()?;
@@ -503,6 +545,7 @@ impl SnakeEnv {
         self.snake = Some(body);
         self.episode_world = keep;
         self.phase = Phase::Running;
+        self.add_obs_noise(obs);
         Ok(self.info(RewardTerms::default(), false))
     }
 
@@ -527,7 +570,18 @@ impl SnakeEnv {
         obs: &mut [f32],
     ) -> Result<StepOutcome> {
         self.check_step(action, obs)?;
-        self.driver.set_action(action.iter().map(|&a| a.into()));
+        if self.delay.is_empty() {
+            self.driver.set_action(action.iter().map(|&a| a.into()));
+        } else {
+            // The motors get the action of `latency_steps` steps ago; this one waits in its slot.
+            let d = action.len();
+            let slot = &mut self.delay[self.delay_head * d..(self.delay_head + 1) * d];
+            self.driver.set_action(slot.iter().copied());
+            for (s, &a) in slot.iter_mut().zip(action) {
+                *s = a.into();
+            }
+            self.delay_head = (self.delay_head + 1) % (self.delay.len() / d);
+        }
         let (base, work) = match self.simulate(obs) {
             Ok(done) => done,
             Err(e) => {
@@ -576,6 +630,7 @@ impl SnakeEnv {
         if terminated || truncated {
             self.phase = Phase::Done;
         }
+        self.add_obs_noise(obs);
         Ok(StepOutcome {
             reward,
             terminated,
@@ -694,6 +749,14 @@ impl SnakeEnv {
             work: self.work,
             path_length: self.path_length,
             displacement: (self.position.0 - self.origin.0).hypot(self.position.1 - self.origin.1),
+        }
+    }
+
+    /// The observation noise of [`Randomize::obs_noise`] on the observation handed out (after the
+    /// reward and the termination read the noiseless one); nothing without it.
+    fn add_obs_noise(&mut self, obs: &mut [f32]) {
+        if let (Some(std), Some(rng)) = (self.physics.obs_noise, self.physics_rng.as_mut()) {
+            randomize::add_noise(obs, std, rng);
         }
     }
 

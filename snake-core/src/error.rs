@@ -7,7 +7,7 @@ use std::ffi::CStr;
 pub enum Error {
     /// A caller-supplied value is out of range, not finite or of the wrong size.
     #[error("invalid argument: {0}")]
-    InvalidArgument(String),
+    InvalidArgument(Invalid),
     /// Bullet refused a call (the shim's message is kept).
     #[error("physics engine error ({code}): {message}")]
     Engine {
@@ -42,15 +42,88 @@ impl Error {
     /// (`file: key: message`).
     pub fn message(&self) -> String {
         match self {
-            Error::InvalidArgument(m) => m.clone(),
+            Error::InvalidArgument(m) => m.to_string(),
             other => other.to_string(),
         }
     }
 }
 
+/// What is invalid: the message, and the key path of the configuration value it is about when it
+/// is about one (`action.steering`), kept apart so that a caller nesting the configuration (a run's
+/// `env` table) prefixes the path ([`Invalid::under`]) instead of taking the message apart. Reads
+/// as the message (`&str`): `key: detail`, or the detail alone.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Invalid {
+    text: String,
+    key: Option<String>,
+    detail: String,
+}
+
+impl Invalid {
+    /// A message about no key in particular.
+    pub fn new(message: impl Into<String>) -> Self {
+        let text = one_line(message.into());
+        Invalid {
+            detail: text.clone(),
+            text,
+            key: None,
+        }
+    }
+
+    /// A message about the value at `key` (a dotted path): `detail` says what is wrong with it.
+    pub fn at(key: impl Into<String>, detail: impl Into<String>) -> Self {
+        let (key, detail) = (key.into(), one_line(detail.into()));
+        Invalid {
+            text: one_line(format!("{key}: {detail}")),
+            key: Some(key),
+            detail,
+        }
+    }
+
+    /// The key path it is about, if any.
+    pub fn key(&self) -> Option<&str> {
+        self.key.as_deref()
+    }
+
+    /// What is wrong, without the key path.
+    pub fn detail(&self) -> &str {
+        &self.detail
+    }
+
+    /// The same error for a configuration nested at `prefix`: the key path `prefix.key`, or for an
+    /// error about no key, the key `prefix` itself (an empty prefix changes nothing).
+    pub fn under(self, prefix: &str) -> Self {
+        if prefix.is_empty() {
+            return self;
+        }
+        match &self.key {
+            Some(key) => Invalid::at(format!("{prefix}.{key}"), self.detail),
+            None => Invalid::at(prefix, self.text),
+        }
+    }
+}
+
+impl std::ops::Deref for Invalid {
+    type Target = str;
+    fn deref(&self) -> &str {
+        &self.text
+    }
+}
+
+impl std::fmt::Display for Invalid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.text)
+    }
+}
+
 /// An `InvalidArgument` error from anything printable, as one line (see [`one_line`]).
 pub(crate) fn invalid(message: impl Into<String>) -> Error {
-    Error::InvalidArgument(one_line(message.into()))
+    Error::InvalidArgument(Invalid::new(message))
+}
+
+/// An `InvalidArgument` error about the value at the key path `key`: `detail` says what is wrong.
+pub(crate) fn invalid_at(key: impl Into<String>, detail: impl Into<String>) -> Error {
+    Error::InvalidArgument(Invalid::at(key, detail))
 }
 
 /// A message as one line, whatever the user's files and values hold: control characters (a newline

@@ -60,11 +60,11 @@ pub use drawing::ShapeDrawing;
 pub use env::{
     route_distance, ActionConfig, ActionMode, Capsule, Craters, Disc, DistancePrecision, EnvConfig,
     GoalDistribution, Info, Layout, ObservationLayout, ObservationPart, ObservationStructure,
-    PegField, ResetOptions, RewardConfig, RewardTerms, Ridges, RoughGround, Segment, SnakeEnv,
-    StartDistribution, StepOutcome, StepResult, Task, TerrainDistribution, HEIGHT_MAP_LEN,
-    HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING,
+    PegField, Physics, Randomize, ResetOptions, RewardConfig, RewardTerms, Ridges, RoughGround,
+    Segment, SnakeEnv, StartDistribution, StepOutcome, StepResult, Task, TerrainDistribution,
+    HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING,
 };
-pub use error::{Error, Result};
+pub use error::{Error, Invalid, Result};
 pub use gait::{
     Gait, GaitChoice, GaitKind, JointRole, JointRoles, LateralUndulation, Serpenoid,
     SerpenoidParams,
@@ -79,7 +79,7 @@ pub use snake::Snake;
 pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};
 pub use world::{
-    BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, JointControl, JointState, Pose,
-    StaticShape, World,
+    BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, DynamicsInfo, JointControl,
+    JointState, Pose, StaticShape, World,
 };
 pub use world_file::{WorldRef, WorldSpec};

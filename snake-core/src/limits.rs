@@ -150,6 +150,20 @@ pub const MAX_SKIN_FRICTION: f64 = 10.0;
 /// servos turn at ~5-10 rad/s), so a larger value is a typo rather than a servo.
 pub const MAX_MOTOR_VELOCITY: f64 = 1.0e4;
 
+/// Most env steps an action may reach the motors late (`randomize.latency_steps`): 32 env steps are
+/// 0.13 s at the default 240 Hz, far beyond a real servo bus's few milliseconds; the delay line holds
+/// this many actions per env.
+pub const MAX_LATENCY_STEPS: u32 = 32;
+
+/// Largest standard deviation of the observation noise (`randomize.obs_noise`), in the observation's
+/// own units (metres, radians, rad/s): larger noise drowns every value the observation holds.
+pub const MAX_OBS_NOISE: f64 = 10.0;
+
+/// Largest factor of a randomized scale (`randomize.mass_scale`, `effort_scale`, `kp_scale`,
+/// `kd_scale`, `skin_friction_scale`); scales must also be > 0. A hundredfold mass or motor is another
+/// robot, not a perturbed one.
+pub const MAX_PHYSICS_SCALE: f64 = 100.0;
+
 /// Largest model file read (a snakesim `.safetensors`, a Stable-Baselines3 `.zip`, or one member of
 /// such a zip once uncompressed), bytes (256 MiB: a network of the largest configurable width holds
 /// far less).
@@ -188,19 +202,44 @@ pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result
     }
 }
 
+/// [`check_range`] for the configuration value at the key path `key`: the error carries the path
+/// ([`crate::Invalid::key`]) apart from what is wrong with it.
+pub fn check_key_range(key: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
+    check_range(key, value, low, high).map_err(|_| {
+        crate::error::invalid_at(
+            key,
+            format!(
+                "must be in [{}, {}], got {}",
+                short(low),
+                short(high),
+                short(value)
+            ),
+        )
+    })
+}
+
+/// [`check_position`] for the configuration value at the key path `key`.
+pub fn check_key_position(key: &str, x: f64, y: f64) -> crate::Result<()> {
+    position_problem(x, y).map_or(Ok(()), |detail| Err(crate::error::invalid_at(key, detail)))
+}
+
 /// Checks a planar position (a goal, a start's x and y) against [`MAX_POSITION`].
 pub fn check_position(what: &str, x: f64, y: f64) -> crate::Result<()> {
+    position_problem(x, y).map_or(Ok(()), |detail| {
+        Err(crate::error::invalid(format!("{what} {detail}")))
+    })
+}
+
+/// What is wrong with a planar position, if anything.
+fn position_problem(x: f64, y: f64) -> Option<String> {
     if !(x.is_finite() && y.is_finite()) {
-        return Err(crate::error::invalid(format!(
-            "{what} must be finite, got ({x:?}, {y:?})"
-        )));
-    }
-    if x.abs() <= MAX_POSITION && y.abs() <= MAX_POSITION {
-        Ok(())
+        Some(format!("must be finite, got ({x:?}, {y:?})"))
+    } else if x.abs() <= MAX_POSITION && y.abs() <= MAX_POSITION {
+        None
     } else {
-        Err(crate::error::invalid(format!(
-            "{what} must have |x| and |y| at most {MAX_POSITION} m, got ({x:?}, {y:?})"
-        )))
+        Some(format!(
+            "must have |x| and |y| at most {MAX_POSITION} m, got ({x:?}, {y:?})"
+        ))
     }
 }
 

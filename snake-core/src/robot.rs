@@ -583,6 +583,7 @@ impl Simulation for Snake {
 pub struct Robot {
     world: World,
     body: BodyId,
+    ground: BodyId,
     movable: Vec<i32>,
     efforts: Vec<f64>,
     motors: Motors,
@@ -606,7 +607,7 @@ impl Robot {
         let defaults = SnakeConfig::default();
         let mut world = World::new()?;
         world.set_time_step(defaults.dt)?;
-        ground.build(&mut world)?;
+        let (ground_body, _) = ground.build(&mut world)?;
         let body = world.add_urdf(
             &spec.urdf,
             [start.x, start.y, start.z],
@@ -641,6 +642,7 @@ impl Robot {
         Ok(Robot {
             world,
             body,
+            ground: ground_body,
             movable: joints.iter().map(|&j| j as i32).collect(),
             efforts,
             motors: spec.motors,
@@ -663,6 +665,26 @@ impl Robot {
     /// The robot's body in [`Robot::world`].
     pub fn body(&self) -> BodyId {
         self.body
+    }
+
+    /// The ground's body in [`Robot::world`].
+    pub fn ground(&self) -> BodyId {
+        self.ground
+    }
+
+    /// Multiplies every movable joint's motor force (the URDF's effort) and the position and velocity
+    /// gains the robot is driven with by these factors.
+    pub fn scale_motors(&mut self, effort: f64, kp: f64, kd: f64) {
+        for e in &mut self.efforts {
+            *e *= effort;
+        }
+        self.motors.kp *= kp;
+        self.motors.kd *= kd;
+    }
+
+    /// The motor force of every movable joint and the gains the robot is driven with now.
+    pub fn motor_settings(&self) -> (&[f64], Motors) {
+        (&self.efforts, self.motors)
     }
 
     /// pybullet joint indices of the movable joints.

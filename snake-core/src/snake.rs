@@ -14,6 +14,7 @@ use crate::world_file::WorldSpec;
 pub struct Snake {
     world: World,
     body: BodyId,
+    ground: BodyId,
     config: SnakeConfig,
     steps: u64,
 }
@@ -31,7 +32,7 @@ impl Snake {
         start.validate()?;
         let mut world = World::new()?;
         world.set_time_step(config.dt)?;
-        ground.build(&mut world)?;
+        let (ground_body, _) = ground.build(&mut world)?;
         world.set_gravity(Vector3::new(0.0, 0.0, config.gravity))?;
 
         let h = config.half_extent;
@@ -74,6 +75,7 @@ impl Snake {
         Ok(Snake {
             world,
             body,
+            ground: ground_body,
             config: config.clone(),
             steps: 0,
         })
@@ -112,6 +114,19 @@ impl Snake {
     /// The snake's body in [`Snake::world`].
     pub fn body(&self) -> BodyId {
         self.body
+    }
+
+    /// The ground's body in [`Snake::world`].
+    pub fn ground(&self) -> BodyId {
+        self.ground
+    }
+
+    /// Multiplies the motor force and the position and velocity gains that [`Snake::set_targets`]
+    /// drives the joints with (and [`Snake::config`] reports) by these factors.
+    pub fn scale_motors(&mut self, effort: f64, kp: f64, kd: f64) {
+        self.config.motor_force *= effort;
+        self.config.position_gain *= kp;
+        self.config.velocity_gain *= kd;
     }
 
     /// Position control of every joint towards `targets` (radians), with the configured motor force

@@ -112,7 +112,9 @@ impl<'a> FinalSteps<'a> {
 /// Prefixes an error's message with the env index.
 fn in_env(env: usize, error: Error) -> Error {
     match error {
-        Error::InvalidArgument(m) => Error::InvalidArgument(format!("env {env}: {m}")),
+        Error::InvalidArgument(m) => {
+            Error::InvalidArgument(crate::error::Invalid::new(format!("env {env}: {m}")))
+        }
         Error::NonFinite(m) => Error::NonFinite(format!("env {env}: {m}")),
         Error::Engine { code, message } => Error::Engine {
             code,

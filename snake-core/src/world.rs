@@ -151,6 +151,17 @@ pub struct Dynamics {
     pub angular_damping: Option<f64>,
 }
 
+/// What `getDynamicsInfo` reports of a body part, in part: [`World::dynamics_info`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DynamicsInfo {
+    /// Mass, kg (0: a fixed base or a massless link).
+    pub mass: f64,
+    /// Lateral (Coulomb) friction coefficient.
+    pub lateral_friction: f64,
+    /// Local inertia diagonal, kg m^2.
+    pub inertia: [f64; 3],
+}
+
 /// The collision shape of a static body (pybullet's `createCollisionShape` types a world file uses).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum StaticShape<'a> {
@@ -714,6 +725,75 @@ impl World {
         };
         // SAFETY: live world; raw is a valid struct for the duration of the call.
         check(unsafe { bullet_sys::ss_change_dynamics(self.ptr(), body.0, link, &raw) })
+    }
+
+    fn link_index(&self, body: BodyId, link: Option<usize>) -> Result<i32> {
+        match link {
+            None => {
+                self.joint_count(body)?;
+                Ok(-1)
+            }
+            Some(l) if l < self.joint_count(body)? => Ok(l as i32),
+            Some(l) => Err(invalid(format!("body {} has no link {l}", body.0))),
+        }
+    }
+
+    /// `changeDynamics(body, link, mass=mass)` (`link` `None`: the base): the part's mass, and its
+    /// local inertia recomputed from its collision shape as pybullet does (an inertia read from a URDF
+    /// file is replaced, as in pybullet). `mass` must be finite and > 0 and the part dynamic (a fixed
+    /// base or a massless link is refused).
+    pub fn set_mass(&mut self, body: BodyId, link: Option<usize>, mass: f64) -> Result<()> {
+        let link = self.link_index(body, link)?;
+        if !(mass.is_finite() && mass > 0.0) {
+            return Err(invalid(format!("mass must be finite and > 0, got {mass}")));
+        }
+        // SAFETY: live world; body and link checked above (the shim checks them again).
+        check(unsafe { bullet_sys::ss_set_mass(self.ptr(), body.0, link, mass) })
+    }
+
+    /// `getDynamicsInfo(body, link)`'s mass, lateral friction and local inertia diagonal (`link`
+    /// `None`: the base).
+    pub fn dynamics_info(&self, body: BodyId, link: Option<usize>) -> Result<DynamicsInfo> {
+        let link = self.link_index(body, link)?;
+        let (mut mass, mut lateral_friction, mut inertia) = (0.0, 0.0, [0.0; 3]);
+        // SAFETY: live world; the three out-pointers address one, one and three f64.
+        check(unsafe {
+            bullet_sys::ss_get_dynamics_info(
+                self.ptr(),
+                body.0,
+                link,
+                &mut mass,
+                &mut lateral_friction,
+                inertia.as_mut_ptr(),
+            )
+        })?;
+        Ok(DynamicsInfo {
+            mass,
+            lateral_friction,
+            inertia,
+        })
+    }
+
+    /// Multiplies the skin friction coefficients of a link (`None`: the base) by `factor` (finite,
+    /// >= 0); returns whether the link has skin friction (nothing changes if not).
+    pub fn scale_skin_friction(
+        &mut self,
+        body: BodyId,
+        link: Option<usize>,
+        factor: f64,
+    ) -> Result<bool> {
+        let link = self.link_index(body, link)?;
+        if !(factor.is_finite() && factor >= 0.0) {
+            return Err(invalid(format!(
+                "skin friction scale must be finite and >= 0, got {factor}"
+            )));
+        }
+        let mut had = 0;
+        // SAFETY: live world; had is one i32 for the duration of the call.
+        check(unsafe {
+            bullet_sys::ss_scale_skin_friction(self.ptr(), body.0, link, factor, &mut had)
+        })?;
+        Ok(had != 0)
     }
 
     /// Skin friction on a link (`None`: the base), with `default_axis` where the skin names none: Hu

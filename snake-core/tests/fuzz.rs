@@ -44,6 +44,11 @@ prop_compose! {
         extended in any::<bool>(),
         weights in (wild(-2.0..2.0), wild(-2.0..2.0), wild(-2.0..2.0), wild(-2.0..2.0), wild(0.0..200.0)),
         physics in (wild(1e-3..10.0), wild(1e-3..10.0), wild(0.0..20.0), wild(0.0..50.0), wild(1e-4..0.05)),
+        randomize in prop::option::weighted(0.3, (
+            pair(0.0..2.0), pair(0.01..3.0), pair(0.01..3.0), pair(0.01..3.0), pair(0.01..3.0),
+            prop_oneof![9 => (0u32..4, 0u32..4).prop_map(|(a, b)| [f64::from(a.min(b)), f64::from(a.max(b))]), 1 => pair(0.0..40.0)],
+            pair(0.0..0.5),
+        )),
     ) -> EnvConfig {
         let mut c = EnvConfig::with_preset(preset, joints);
         c.goal = goal;
@@ -65,6 +70,18 @@ prop_compose! {
         ) = weights;
         (c.snake.link_mass, c.snake.base_mass, c.snake.lateral_friction, c.snake.motor_force, c.snake.dt) =
             physics;
+        c.randomize = randomize.map(|(friction, mass, effort, kp, kd, latency, noise)| {
+            snake_core::Randomize {
+                ground_friction: Some(friction),
+                mass_scale: Some(mass),
+                effort_scale: Some(effort),
+                kp_scale: Some(kp),
+                kd_scale: Some(kd),
+                latency_steps: Some(latency),
+                obs_noise: Some(noise),
+                skin_friction_scale: None,
+            }
+        });
         c
     }
 }

@@ -80,8 +80,9 @@ fn hand_controller_names() -> Vec<&'static str> {
     HandController::ALL.iter().map(|c| c.name()).collect()
 }
 
-/// SteerAssist(assist_json, config_json): `baseline:steer` sharing an agent's gait actions in the
-/// env of `config_json` (`{"residual": bool, "near_goal": metres}`, snake-core's `SteerAssist`).
+/// SteerAssist(config_json, residual=False, near_goal=0.0): `baseline:steer` sharing an agent's gait
+/// actions in the env of `config_json` (snake-core's `SteerAssist`); `SteerAssist.from_json` reads the
+/// JSON a model records.
 #[pyclass(module = "snakesim._core", frozen)]
 struct SteerAssist {
     bound: AssistedEnv,
@@ -90,12 +91,23 @@ struct SteerAssist {
 #[pymethods]
 impl SteerAssist {
     #[new]
-    fn new(assist_json: &str, config_json: &str) -> PyResult<Self> {
+    #[pyo3(signature = (config_json, residual=false, near_goal=0.0))]
+    fn new(config_json: &str, residual: bool, near_goal: f64) -> PyResult<Self> {
+        Self::bound(
+            CoreAssist {
+                residual,
+                near_goal,
+            },
+            config_json,
+        )
+    }
+
+    /// The assist a model records (its JSON) in the env of `config_json`.
+    #[staticmethod]
+    fn from_json(assist_json: &str, config_json: &str) -> PyResult<Self> {
         let assist: CoreAssist = serde_json::from_str(assist_json)
             .map_err(|e| PyValueError::new_err(format!("steer_assist: {e}")))?;
-        let config = parse_config(config_json)?;
-        let bound = assist.bind(&config).map_err(to_py)?;
-        Ok(SteerAssist { bound })
+        Self::bound(assist, config_json)
     }
 
     #[getter]
@@ -132,6 +144,12 @@ impl SteerAssist {
 }
 
 impl SteerAssist {
+    fn bound(assist: CoreAssist, config_json: &str) -> PyResult<Self> {
+        let config = parse_config(config_json)?;
+        let bound = assist.bind(&config).map_err(to_py)?;
+        Ok(SteerAssist { bound })
+    }
+
     fn check_dim(&self, dim: usize) -> PyResult<()> {
         let expected = self.bound.observation_dim();
         if dim != expected {

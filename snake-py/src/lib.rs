@@ -18,7 +18,7 @@ mod native;
 /// snake-core's errors as Python exceptions: bad input is a ValueError, a failing engine a RuntimeError.
 fn to_py(error: snake_core::Error) -> PyErr {
     match error {
-        snake_core::Error::InvalidArgument(m) => PyValueError::new_err(m),
+        snake_core::Error::InvalidArgument(m) => PyValueError::new_err(m.to_string()),
         other => PyRuntimeError::new_err(other.to_string()),
     }
 }
@@ -235,10 +235,27 @@ impl Env {
             start: start.map(|(x, y, z, yaw)| StartPose { x, y, z, yaw }),
             goal,
         };
-        let (obs, info) = self
-            .with(py, |env| env.reset(seed, options))
+        let (obs, info, physics) = self
+            .with(py, |env| {
+                let (obs, info) = env.reset(seed, options)?;
+                let physics = env.config().randomize.is_some().then(|| *env.physics());
+                Ok::<_, snake_core::Error>((obs, info, physics))
+            })
             .map_err(to_py)?;
-        Ok((PyArray1::from_vec(py, obs), info_dict(py, &info)?))
+        let d = info_dict(py, &info)?;
+        if let Some(physics) = physics {
+            // The drawn physics under `randomize`'s keys (the given ones only).
+            let p = PyDict::new(py);
+            for (key, value) in physics.values() {
+                if key == "latency_steps" {
+                    p.set_item(key, value as u32)?;
+                } else {
+                    p.set_item(key, value)?;
+                }
+            }
+            d.set_item("physics", p)?;
+        }
+        Ok((PyArray1::from_vec(py, obs), d))
     }
 
     /// step(action) -> (obs, reward, terminated, truncated, info)

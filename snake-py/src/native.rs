@@ -414,7 +414,7 @@ fn env_throughput(
     let config = super::parse_config(env_json)?;
     py.detach(|| snake_rl::bench::env_throughput(&config, n_envs, threads, seconds, seed))
         .map_err(|e| match e {
-            snake_core::Error::InvalidArgument(m) => PyValueError::new_err(m),
+            snake_core::Error::InvalidArgument(m) => PyValueError::new_err(m.to_string()),
             e => PyRuntimeError::new_err(e.to_string()),
         })
 }

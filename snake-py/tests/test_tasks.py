@@ -433,7 +433,7 @@ def test_the_steer_assist_wrapper_hands_the_last_approach_to_steer_and_bad_uses_
     for assist, kind, message in (
         ({"near_goal": 11.0}, ValueError, r"steer_assist.near_goal: must be in \[0, 10\] m"),
         ({"near_goal": float("nan")}, ValueError, "steer_assist.near_goal: must be in"),
-        ({"near_goal": "near"}, ValueError, "steer_assist: invalid type"),
+        ({"near_goal": "near"}, TypeError, "near_goal"),
         ({}, ValueError, "steer_assist: set residual: true, near_goal: METRES or both"),
         ({"residual": "yes"}, TypeError, "residual must be True or False"),
     ):

@@ -23,10 +23,12 @@ pub fn env_throughput(
     let (max_envs, max_threads) = (limits::MAX_ENVS as usize, limits::MAX_THREADS as usize);
     let seconds_ok = seconds > 0.0 && seconds <= limits::MAX_BENCH_SECONDS;
     if !((1..=max_envs).contains(&n_envs) && (1..=max_threads).contains(&threads) && seconds_ok) {
-        return Err(snake_core::Error::InvalidArgument(format!(
+        return Err(snake_core::Error::InvalidArgument(
+            snake_core::Invalid::new(format!(
             "n_envs must be in [1, {max_envs}], threads in [1, {max_threads}], seconds in (0, {}]",
             limits::MAX_BENCH_SECONDS
-        )));
+        )),
+        ));
     }
     let mut envs = VecSnakeEnv::new(config.clone(), n_envs)?;
     envs = if threads <= 1 {
@@ -36,7 +38,9 @@ pub fn env_throughput(
             .num_threads(threads)
             .build()
             .map_err(|e| {
-                snake_core::Error::InvalidArgument(format!("cannot start {threads} threads: {e}"))
+                snake_core::Error::InvalidArgument(snake_core::Invalid::new(format!(
+                    "cannot start {threads} threads: {e}"
+                )))
             })?;
         envs.with_pool(Arc::new(pool))
     };

@@ -25,13 +25,36 @@ use snake_core::{EnvConfig, Preset, SteerAssist};
 
 use crate::nn::Arch;
 
-/// A configuration that cannot be used; the message names the key path and what is wrong.
+/// A configuration that cannot be used; the message names the key path and what is wrong. The key
+/// path is also kept apart ([`ConfigError::key`]), so that a caller can name the flag that set a key
+/// without taking the message apart.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{0}")]
-pub struct ConfigError(pub String);
+pub struct ConfigError(pub String, Option<(String, String)>);
+
+impl ConfigError {
+    /// The key path the error is about (`env.max_episode_steps`), when it is about one.
+    pub fn key(&self) -> Option<&str> {
+        self.1.as_ref().map(|(key, _)| key.as_str())
+    }
+
+    /// What is wrong, without the key path.
+    pub fn detail(&self) -> &str {
+        self.1.as_ref().map_or(&self.0, |(_, detail)| detail)
+    }
+}
 
 fn err(message: impl Into<String>) -> ConfigError {
-    ConfigError(crate::one_line(message.into()))
+    ConfigError(crate::one_line(message.into()), None)
+}
+
+/// An error about the value at the key path `key`.
+fn key_err(key: impl Into<String>, detail: impl Into<String>) -> ConfigError {
+    let (key, detail) = (key.into(), crate::one_line(detail.into()));
+    ConfigError(
+        crate::one_line(format!("{key}: {detail}")),
+        Some((key, detail)),
+    )
 }
 
 /// Limits of a run's sizes: each keeps a typo from asking for an impossible run.
@@ -483,7 +506,7 @@ pub fn from_value<T: de::DeserializeOwned>(value: Value, prefix: &str) -> Result
         if path.is_empty() {
             err(inner)
         } else {
-            err(format!("{path}: {inner}"))
+            key_err(path, inner)
         }
     })
 }
@@ -508,7 +531,10 @@ pub fn env_config(
     let max = snake_core::config::MAX_JOINTS;
     if !(1..=max).contains(&joints) {
         // `joints` is a key of its own (the run's top level, or SnakeEnv's keyword), not of `env`.
-        return Err(err(format!("joints: must be in [1, {max}], got {joints}")));
+        return Err(key_err(
+            "joints",
+            format!("must be in [1, {max}], got {joints}"),
+        ));
     }
     for key in ["joints", "preset"] {
         if table.contains_key(key) {
@@ -604,31 +630,25 @@ pub fn env_keyword_defaults(task: Task) -> Map<String, Value> {
     map.entry("terrain").or_insert(Value::Null);
     // The default height map (left out of serialised configs while it is the default).
     map.entry("height_map").or_insert(Value::Null);
+    // Nominal physics every episode.
+    map.entry("randomize").or_insert(Value::Null);
     map
 }
 
-/// snake-core's "field.path must be ..." messages as "prefix.field.path: must be ...".
+/// A snake-core error of a configuration nested at `prefix` (the run's `env` table) as a
+/// configuration error: its key path under `prefix` (snake-core keeps the path apart from the
+/// message, [`snake_core::Invalid`]).
 fn with_path(prefix: &str, e: snake_core::Error) -> ConfigError {
-    let message = match e {
-        snake_core::Error::InvalidArgument(m) => m,
-        other => other.to_string(),
-    };
-    let is_path = |w: &str| {
-        !w.is_empty()
-            && w.chars()
-                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "_.[]".contains(c))
-    };
-    match message.split_once(' ') {
-        Some((field, rest)) if is_path(field) => {
-            let path = if prefix.is_empty() {
-                field.to_owned()
-            } else {
-                format!("{prefix}.{field}")
-            };
-            err(format!("{path}: {rest}"))
+    match e {
+        snake_core::Error::InvalidArgument(m) => {
+            let m = m.under(prefix);
+            match m.key() {
+                Some(key) => key_err(key, m.detail()),
+                None => err(m.to_string()),
+            }
         }
-        _ if prefix.is_empty() => err(message),
-        _ => err(format!("{prefix}: {message}")),
+        other if prefix.is_empty() => err(other.to_string()),
+        other => key_err(prefix, other.to_string()),
     }
 }
 
@@ -639,19 +659,20 @@ fn check_range<T: PartialOrd + std::fmt::Display + Copy>(
     high: T,
 ) -> Result<(), ConfigError> {
     if value < low || value > high {
-        return Err(err(format!(
-            "{key}: must be in [{low}, {high}], got {value}"
-        )));
+        return Err(key_err(
+            key,
+            format!("must be in [{low}, {high}], got {value}"),
+        ));
     }
     Ok(())
 }
 
 fn check_real(key: &str, value: f64, positive: bool) -> Result<(), ConfigError> {
     if !value.is_finite() {
-        return Err(err(format!("{key}: must be finite, got {value}")));
+        return Err(key_err(key, format!("must be finite, got {value}")));
     }
     if positive && value <= 0.0 {
-        return Err(err(format!("{key}: must be positive, got {value}")));
+        return Err(key_err(key, format!("must be positive, got {value}")));
     }
     Ok(())
 }
@@ -785,7 +806,7 @@ impl RunConfig {
                     "steer_assist: only the native trainer applies it (trainer: native)",
                 ));
             }
-            assist.bind(&env).map_err(|e| err(e.message()))?;
+            assist.bind(&env).map_err(|e| with_path("", e))?;
         }
         let row_bytes = 4 * (env.observation_dim() + env.action_dim() + 8) as u64;
         if rollout.saturating_mul(row_bytes) > MAX_ROLLOUT_BYTES {

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{invalid, Result};
+use crate::error::{invalid_at, Result};
 use crate::gait::{Gait, LateralUndulation, SteeredWave};
 
 /// Largest wave amplitude the gait modes accept, radians: beyond about 90 degrees neighbouring cubes
@@ -106,22 +106,28 @@ impl ActionConfig {
         for (name, [low, high], min, max) in ranges {
             let inside = |v: f64| v.is_finite() && v >= min && v <= max;
             if !(inside(low) && inside(high) && low <= high) {
-                return Err(invalid(format!(
-                    "{name} must be a range [low, high] with {min} <= low <= high <= {max}, got [{low}, {high}]"
+                return Err(invalid_at(
+                    name,
+                    format!(
+                    "must be a range [low, high] with {min} <= low <= high <= {max}, got [{low}, {high}]"
                 )));
             }
         }
         if self.frequency[0] <= 0.0 {
-            return Err(invalid(format!(
-                "action.frequency must be above 0 Hz, got [{}, {}]",
-                self.frequency[0], self.frequency[1]
-            )));
+            return Err(invalid_at(
+                "action.frequency",
+                format!(
+                    "must be above 0 Hz, got [{}, {}]",
+                    self.frequency[0], self.frequency[1]
+                ),
+            ));
         }
         let r = self.residual_scale;
         if !(r.is_finite() && (0.0..=MAX_RESIDUAL_SCALE).contains(&r)) {
-            return Err(invalid(format!(
-                "action.residual_scale must be in [0, {MAX_RESIDUAL_SCALE}], got {r}"
-            )));
+            return Err(invalid_at(
+                "action.residual_scale",
+                format!("must be in [0, {MAX_RESIDUAL_SCALE}], got {r}"),
+            ));
         }
         Ok(())
     }

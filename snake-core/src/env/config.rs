@@ -4,12 +4,13 @@ use serde::{Deserialize, Serialize};
 
 use super::action::{ActionConfig, ActionMode};
 use super::height_map::HeightMap;
+use super::randomize::Randomize;
 use super::reward::RewardConfig;
 use super::terrain::{PegField, RoughGround, TerrainDistribution};
 use crate::config::{Preset, SnakeConfig};
-use crate::error::{invalid, Result};
+use crate::error::{invalid, invalid_at, Result};
 use crate::limits::{
-    check_position, check_range, MAX_ACTION_SCALE, MAX_EPISODE_STEPS,
+    check_key_position, check_key_range, MAX_ACTION_SCALE, MAX_EPISODE_STEPS,
     MAX_PHYSICS_STEPS_PER_ENV_STEP, MAX_POSITION, MAX_REWARD_WEIGHT, MAX_START_HEIGHT, MAX_YAW,
 };
 use crate::robot::RobotRef;
@@ -69,6 +70,12 @@ pub struct EnvConfig {
     pub height_map: HeightMap,
     /// Optional reward terms and the success reward.
     pub reward: RewardConfig,
+    /// Physics drawn anew at every reset from the env's physics stream ([`Randomize`]: ground
+    /// friction, masses, motors, latency, observation noise, skin friction); `None` (the default):
+    /// the nominal physics every episode. Left out of written configurations while `None`, so a
+    /// configuration recorded before it existed resolves as it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub randomize: Option<Randomize>,
 }
 
 impl Default for EnvConfig {
@@ -89,6 +96,7 @@ impl Default for EnvConfig {
             observation: ObservationLayout::Paper,
             height_map: HeightMap::default(),
             reward: RewardConfig::default(),
+            randomize: None,
         }
     }
 }
@@ -133,15 +141,19 @@ impl GoalDistribution {
     pub fn validate(&self) -> Result<()> {
         let [d0, d1] = self.distance;
         if !(d0.is_finite() && d1.is_finite() && 0.0 <= d0 && d0 <= d1 && d1 <= MAX_GOAL_DISTANCE) {
-            return Err(invalid(format!(
-                "goal_distribution.distance must be a range [low, high] with 0 <= low <= high <= {MAX_GOAL_DISTANCE} m, got [{d0}, {d1}]"
+            return Err(invalid_at(
+                "goal_distribution.distance",
+                format!(
+                "must be a range [low, high] with 0 <= low <= high <= {MAX_GOAL_DISTANCE} m, got [{d0}, {d1}]"
             )));
         }
         let [b0, b1] = self.bearing;
         let tau = std::f64::consts::TAU;
         if !(b0.is_finite() && b1.is_finite() && b0 <= b1 && b0 >= -tau && b1 <= tau) {
-            return Err(invalid(format!(
-                "goal_distribution.bearing must be a range [low, high] of radians with -2 pi <= low <= high <= 2 pi, got [{b0}, {b1}]"
+            return Err(invalid_at(
+                "goal_distribution.bearing",
+                format!(
+                "must be a range [low, high] of radians with -2 pi <= low <= high <= 2 pi, got [{b0}, {b1}]"
             )));
         }
         Ok(())
@@ -196,22 +208,25 @@ impl StartDistribution {
             ("start.yaw", self.yaw, MAX_YAW),
         ] {
             if !(low.is_finite() && high.is_finite()) {
-                return Err(invalid(format!(
-                    "{name} must be finite, got [{low}, {high}]"
-                )));
+                return Err(invalid_at(
+                    name,
+                    format!("must be finite, got [{low}, {high}]"),
+                ));
             }
             if low > high {
-                return Err(invalid(format!(
-                    "{name} must have low <= high, got [{low}, {high}]"
-                )));
+                return Err(invalid_at(
+                    name,
+                    format!("must have low <= high, got [{low}, {high}]"),
+                ));
             }
             if low < -bound || high > bound {
-                return Err(invalid(format!(
-                    "{name} must lie within [-{bound}, {bound}], got [{low:?}, {high:?}]"
-                )));
+                return Err(invalid_at(
+                    name,
+                    format!("must lie within [-{bound}, {bound}], got [{low:?}, {high:?}]"),
+                ));
             }
         }
-        check_range("start.z", self.z, 0.0, MAX_START_HEIGHT)
+        check_key_range("start.z", self.z, 0.0, MAX_START_HEIGHT)
     }
 }
 
@@ -604,30 +619,36 @@ impl EnvConfig {
     /// Checks every field; the one-line error names the first bad one.
     pub fn validate(&self) -> Result<()> {
         self.snake.validate().map_err(|e| match e {
-            crate::Error::InvalidArgument(m) => invalid(format!("snake.{m}")),
+            crate::Error::InvalidArgument(m) => crate::Error::InvalidArgument(m.under("snake")),
             other => other,
         })?;
         if let Some(r) = &self.robot {
             if self.joints() == 0 {
-                return Err(invalid(format!(
-                    "robot: {} has no movable joint to act on",
-                    r.path().display()
-                )));
+                return Err(invalid_at(
+                    "robot",
+                    format!("{} has no movable joint to act on", r.path().display()),
+                ));
             }
         }
-        check_position("goal", self.goal.0, self.goal.1)?;
-        check_range("goal_radius", self.goal_radius, 0.0, MAX_POSITION)?;
+        check_key_position("goal", self.goal.0, self.goal.1)?;
+        check_key_range("goal_radius", self.goal_radius, 0.0, MAX_POSITION)?;
         if !(1..=MAX_EPISODE_STEPS).contains(&self.max_episode_steps) {
-            return Err(invalid(format!(
-                "max_episode_steps must be in [1, {MAX_EPISODE_STEPS}], got {}",
-                self.max_episode_steps
-            )));
+            return Err(invalid_at(
+                "max_episode_steps",
+                format!(
+                    "must be in [1, {MAX_EPISODE_STEPS}], got {}",
+                    self.max_episode_steps
+                ),
+            ));
         }
         if !(1..=MAX_PHYSICS_STEPS_PER_ENV_STEP).contains(&self.physics_steps_per_env_step) {
-            return Err(invalid(format!(
-                "physics_steps_per_env_step must be in [1, {MAX_PHYSICS_STEPS_PER_ENV_STEP}], got {}",
-                self.physics_steps_per_env_step
-            )));
+            return Err(invalid_at(
+                "physics_steps_per_env_step",
+                format!(
+                    "must be in [1, {MAX_PHYSICS_STEPS_PER_ENV_STEP}], got {}",
+                    self.physics_steps_per_env_step
+                ),
+            ));
         }
         self.start.validate()?;
         if let Some(goals) = &self.goal_distribution {
@@ -639,19 +660,32 @@ impl EnvConfig {
         self.action.validate()?;
         self.height_map.validate()?;
         if !self.height_map.is_default() && self.observation != ObservationLayout::Terrain {
-            return Err(invalid(format!(
-                "height_map needs observation 'terrain' (the map is its last values), got '{}'",
-                self.observation.name()
-            )));
+            return Err(invalid_at(
+                "height_map",
+                format!(
+                    "needs observation 'terrain' (the map is its last values), got '{}'",
+                    self.observation.name()
+                ),
+            ));
         }
         if !(self.action_scale.is_finite()
             && self.action_scale > 0.0
             && self.action_scale <= MAX_ACTION_SCALE)
         {
-            return Err(invalid(format!(
-                "action_scale must be in (0, {MAX_ACTION_SCALE}], got {}",
-                self.action_scale
-            )));
+            return Err(invalid_at(
+                "action_scale",
+                format!(
+                    "must be in (0, {MAX_ACTION_SCALE}], got {}",
+                    self.action_scale
+                ),
+            ));
+        }
+        if let Some(randomize) = &self.randomize {
+            let has_skin = match &self.robot {
+                None => self.snake.skin_friction.is_some(),
+                Some(r) => r.spec().skin_friction.iter().any(Option::is_some),
+            };
+            randomize.validate(has_skin)?;
         }
         self.reward.validate()
     }
@@ -667,7 +701,7 @@ impl RewardConfig {
             ("reward.energy_weight", self.energy_weight),
             ("reward.success_reward", self.success_reward),
         ] {
-            check_range(name, w, -MAX_REWARD_WEIGHT, MAX_REWARD_WEIGHT)?;
+            check_key_range(name, w, -MAX_REWARD_WEIGHT, MAX_REWARD_WEIGHT)?;
         }
         Ok(())
     }

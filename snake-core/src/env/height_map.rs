@@ -9,7 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{invalid, Result};
+use crate::error::{invalid_at, Result};
 use crate::world_file::{Ground, WorldSpec};
 
 /// Points per side of the square grid.
@@ -71,16 +71,20 @@ impl HeightMap {
     /// Checks the grid; the error names the field and the allowed values.
     pub fn validate(&self) -> Result<()> {
         if self.side.is_multiple_of(2) || !(1..=MAX_HEIGHT_MAP_SIDE).contains(&self.side) {
-            return Err(invalid(format!(
-                "height_map.side must be odd, from 1 to {MAX_HEIGHT_MAP_SIDE}, got {}",
-                self.side
-            )));
+            return Err(invalid_at(
+                "height_map.side",
+                format!(
+                    "must be odd, from 1 to {MAX_HEIGHT_MAP_SIDE}, got {}",
+                    self.side
+                ),
+            ));
         }
         let s = self.spacing;
         if !(s.is_finite() && s > 0.0 && s <= MAX_HEIGHT_MAP_SPACING) {
-            return Err(invalid(format!(
-                "height_map.spacing must be in (0, {MAX_HEIGHT_MAP_SPACING}] metres, got {s}"
-            )));
+            return Err(invalid_at(
+                "height_map.spacing",
+                format!("must be in (0, {MAX_HEIGHT_MAP_SPACING}] metres, got {s}"),
+            ));
         }
         Ok(())
     }

@@ -9,9 +9,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::route::{Disc, Segment};
-use crate::error::{invalid, Result};
+use crate::error::{invalid_at, Result};
 use crate::limits::{
-    check_range, MAX_CRATERS, MAX_HEIGHTFIELD_SAMPLES, MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES,
+    check_key_range, MAX_CRATERS, MAX_HEIGHTFIELD_SAMPLES, MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES,
     MAX_OBSTACLE_SIZE, MAX_RIDGES, MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
 };
 use crate::math::StartPose;
@@ -187,26 +187,26 @@ impl Craters {
 
     fn validate(&self) -> Result<()> {
         if self.count > MAX_CRATERS {
-            return Err(invalid(format!(
-                "terrain.rough.craters.count must be at most {MAX_CRATERS}, got {}",
-                self.count
-            )));
+            return Err(invalid_at(
+                "terrain.rough.craters.count",
+                format!("must be at most {MAX_CRATERS}, got {}", self.count),
+            ));
         }
         size("terrain.rough.craters.radius", self.radius)?;
-        check_range(
+        check_key_range(
             "terrain.rough.craters.depth",
             self.depth,
             0.0,
             MAX_TERRAIN_HEIGHT,
         )?;
-        check_range("terrain.rough.craters.wall", self.wall, 0.0, self.radius)?;
+        check_key_range("terrain.rough.craters.wall", self.wall, 0.0, self.radius)?;
         for (what, v) in [
             ("terrain.rough.craters.offset", self.offset),
             ("terrain.rough.craters.start_clear", self.start_clear),
             ("terrain.rough.craters.goal_clear", self.goal_clear),
             ("terrain.rough.craters.clearance", self.clearance),
         ] {
-            check_range(what, v, 0.0, MAX_OBSTACLE_SIZE)?;
+            check_key_range(what, v, 0.0, MAX_OBSTACLE_SIZE)?;
         }
         Ok(())
     }
@@ -319,12 +319,12 @@ impl Ridges {
 
     fn validate(&self) -> Result<()> {
         if self.count > MAX_RIDGES {
-            return Err(invalid(format!(
-                "terrain.rough.ridges.count must be at most {MAX_RIDGES}, got {}",
-                self.count
-            )));
+            return Err(invalid_at(
+                "terrain.rough.ridges.count",
+                format!("must be at most {MAX_RIDGES}, got {}", self.count),
+            ));
         }
-        check_range(
+        check_key_range(
             "terrain.rough.ridges.height",
             self.height,
             0.0,
@@ -339,7 +339,7 @@ impl Ridges {
             ("terrain.rough.ridges.goal_clear", self.goal_clear),
             ("terrain.rough.ridges.clearance", self.clearance),
         ] {
-            check_range(what, v, 0.0, MAX_OBSTACLE_SIZE)?;
+            check_key_range(what, v, 0.0, MAX_OBSTACLE_SIZE)?;
         }
         Ok(())
     }
@@ -452,14 +452,17 @@ fn size(what: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 && v <= MAX_OBSTACLE_SIZE {
         Ok(())
     } else {
-        Err(invalid(format!(
-            "{what} must be in (0, {MAX_OBSTACLE_SIZE}] m, got {v:?}"
-        )))
+        Err(invalid_at(
+            what,
+            format!("must be in (0, {MAX_OBSTACLE_SIZE}] m, got {v:?}"),
+        ))
     }
 }
 
 fn friction(what: &str, v: Option<f64>) -> Result<()> {
-    v.map_or(Ok(()), |f| check_range(what, f, 0.0, MAX_WORLD_FRICTION))
+    v.map_or(Ok(()), |f| {
+        check_key_range(what, f, 0.0, MAX_WORLD_FRICTION)
+    })
 }
 
 impl TerrainDistribution {
@@ -470,15 +473,15 @@ impl TerrainDistribution {
             size("terrain.pegs.radius", p.radius)?;
             size("terrain.pegs.height", p.height)?;
             size("terrain.pegs.width", p.width)?;
-            check_range("terrain.pegs.jitter", p.jitter, 0.0, MAX_OBSTACLE_SIZE)?;
-            check_range("terrain.pegs.density", p.density, 0.0, 1.0)?;
-            check_range(
+            check_key_range("terrain.pegs.jitter", p.jitter, 0.0, MAX_OBSTACLE_SIZE)?;
+            check_key_range("terrain.pegs.density", p.density, 0.0, 1.0)?;
+            check_key_range(
                 "terrain.pegs.start_clear",
                 p.start_clear,
                 0.0,
                 MAX_OBSTACLE_SIZE,
             )?;
-            check_range(
+            check_key_range(
                 "terrain.pegs.goal_clear",
                 p.goal_clear,
                 0.0,
@@ -487,13 +490,13 @@ impl TerrainDistribution {
             friction("terrain.pegs.lateral_friction", p.lateral_friction)?;
         }
         if let Some(r) = &self.rough {
-            check_range(
+            check_key_range(
                 "terrain.rough.amplitude",
                 r.amplitude,
                 0.0,
                 MAX_TERRAIN_HEIGHT,
             )?;
-            check_range(
+            check_key_range(
                 "terrain.rough.hills_amplitude",
                 r.hills_amplitude,
                 0.0,
@@ -502,7 +505,7 @@ impl TerrainDistribution {
             size("terrain.rough.wavelength", r.wavelength)?;
             size("terrain.rough.hills_wavelength", r.hills_wavelength)?;
             size("terrain.rough.spacing", r.spacing)?;
-            check_range("terrain.rough.margin", r.margin, 0.0, MAX_OBSTACLE_SIZE)?;
+            check_key_range("terrain.rough.margin", r.margin, 0.0, MAX_OBSTACLE_SIZE)?;
             r.craters.validate()?;
             r.ridges.validate()?;
             friction("terrain.rough.friction", r.friction)?;
@@ -548,14 +551,14 @@ impl TerrainDistribution {
             let half = reach + r.margin;
             let side = (2.0 * half / r.spacing).ceil() + 1.0;
             if side > MAX_HEIGHTFIELD_SIDE as f64 || side * side > MAX_HEIGHTFIELD_SAMPLES as f64 {
-                return Err(invalid(format!(
-                    "terrain.rough: {side} x {side} samples for start and goal {:.1} m from the origin, more than {MAX_HEIGHTFIELD_SIDE} a side or {MAX_HEIGHTFIELD_SAMPLES} in all: raise spacing",
-                    reach
-                )));
+                return Err(invalid_at(
+                    "terrain.rough",
+                    format!("{side} x {side} samples for start and goal {reach:.1} m from the origin, more than {MAX_HEIGHTFIELD_SIDE} a side or {MAX_HEIGHTFIELD_SAMPLES} in all: raise spacing"),
+                ));
             }
             let n = side as usize;
             let key = |name: &'static str| {
-                move |e: crate::Error| invalid(format!("terrain.rough.{name}: {}", e.message()))
+                move |e: crate::Error| invalid_at(format!("terrain.rough.{name}"), e.message())
             };
             let a = rough_heights(r.amplitude, r.wavelength, bumps, n, n, r.spacing)
                 .map_err(key("wavelength"))?;
@@ -607,9 +610,10 @@ impl TerrainDistribution {
             };
             let across = (p.width / p.spacing).floor() + 1.0;
             if along * across + world.obstacles.len() as f64 > MAX_OBSTACLES as f64 {
-                return Err(invalid(format!(
-                    "terrain.pegs: {along} x {across} grid points, more than the {MAX_OBSTACLES} obstacles a world may have"
-                )));
+                return Err(invalid_at(
+                    "terrain.pegs",
+                    format!("{along} x {across} grid points, more than the {MAX_OBSTACLES} obstacles a world may have"),
+                ));
             }
             for i in 0..along as usize {
                 for j in 0..across as usize {

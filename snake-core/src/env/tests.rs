@@ -10,7 +10,7 @@ fn env(config: EnvConfig) -> SnakeEnv {
 
 fn invalid_message(result: Result<impl std::fmt::Debug>) -> String {
     match result {
-        Err(Error::InvalidArgument(m)) => m,
+        Err(Error::InvalidArgument(m)) => m.to_string(),
         other => panic!("expected InvalidArgument, got {other:?}"),
     }
 }
@@ -436,21 +436,21 @@ fn limits_refuse_what_would_not_be_finite_or_resolved() {
             goal: (1e308, 0.0),
             ..EnvConfig::default()
         },
-        "goal must have |x| and |y| at most 10000",
+        "goal: must have |x| and |y| at most 10000",
     );
     let mut weights = EnvConfig::default();
     weights.reward.energy_weight = 1e308;
-    refused(weights, "reward.energy_weight must be in");
+    refused(weights, "reward.energy_weight: must be in");
     refused(
         EnvConfig {
             physics_steps_per_env_step: u32::MAX,
             ..EnvConfig::default()
         },
-        "physics_steps_per_env_step must be in [1, 240]",
+        "physics_steps_per_env_step: must be in [1, 240]",
     );
     let mut start = EnvConfig::default();
     start.start.y = [0.0, 1e18];
-    refused(start, "start.y must lie within");
+    refused(start, "start.y: must lie within");
 
     let mut env = SnakeEnv::new(EnvConfig::default()).unwrap();
     for (x, needle) in [(1e39, "start must have"), (f64::MAX, "start must have")] {
@@ -996,7 +996,7 @@ fn a_larger_height_map_holds_the_default_one_in_its_middle() {
         ..EnvConfig::rough_task(Preset::Paper, 10)
     };
     let m = invalid_message(SnakeEnv::new(bad));
-    assert!(m.starts_with("height_map.side must be odd"), "{m}");
+    assert!(m.starts_with("height_map.side: must be odd"), "{m}");
 }
 
 /// Every task's observation, in every layout (and the terrain layout with a larger height map), is

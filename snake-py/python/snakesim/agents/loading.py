@@ -139,7 +139,7 @@ def bind_assist(where: Path | str, assist: Any, env_kwargs: Mapping[str, Any]) -
         return None
     text = assist if isinstance(assist, str) else json.dumps(assist)
     try:
-        return _core.SteerAssist(text, env_config(**env_kwargs))
+        return _core.SteerAssist.from_json(text, env_config(**env_kwargs))
     except (TypeError, ValueError) as error:
         raise AgentError(f"{where}: {error}") from None
 

@@ -116,6 +116,37 @@ def baseline_env_options(p: argparse.ArgumentParser) -> None:
     )
 
 
+def read_randomize(path: str | os.PathLike) -> dict:
+    """The ``randomize`` mapping of a YAML file (parameter -> [low, high], the env keyword's), read
+    with the bounded reader; UserError naming the file otherwise."""
+    import json
+
+    from snakesim import _core
+    from snakesim.cli.errors import UserError
+    from snakesim.files import FileError, read_text
+
+    name = os.fspath(path)
+    try:
+        text = read_text(path, "config_bytes")
+    except FileError as error:
+        raise UserError(f"--randomize {error}") from None
+    except FileNotFoundError:
+        raise UserError(f"--randomize {name} does not exist") from None
+    except IsADirectoryError:
+        raise UserError(f"--randomize {name} is a directory") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise UserError(f"--randomize: cannot read {name}: {error}") from None
+    try:
+        data = json.loads(_core.parse_yaml(text))
+    except ValueError as error:
+        raise UserError(f"--randomize {name}: {error}") from None
+    if not isinstance(data, dict):
+        raise UserError(
+            f"--randomize {name} must hold a mapping of parameter to [low, high], not {type(data).__name__}"
+        )
+    return data
+
+
 def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLike, str]] = ()):
     """The agent the command's arguments name; UserError when one of the command's ``outputs``
     ((path, flag), checked writable before) is a file the agent is read from, or two are one file."""
@@ -135,6 +166,9 @@ def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLi
         overrides = {"goal": args.goal, "goal_distribution": None}
     if getattr(args, "robot", None) is not None:
         overrides = {**(overrides or {}), "robot": args.robot}
+    if getattr(args, "randomize", None) is not None:
+        # A physics distribution instead of the agent's own (checked when the env is made).
+        overrides = {**(overrides or {}), "randomize": read_randomize(args.randomize)}
     agent = load_agent(
         args.source,
         joints=args.joints,

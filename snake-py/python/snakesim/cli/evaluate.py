@@ -41,6 +41,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         "trained_timesteps": agent.num_timesteps,
         "seed": args.seed,
         "deterministic": not args.stochastic,
+        "randomize": agent.env_kwargs.get("randomize"),
         **result,
     }
     text = json.dumps(report, indent=2) + "\n"
@@ -99,6 +100,12 @@ def add_parser(sub) -> None:
         help="a fixed goal instead of the agent's task's (e.g. 0,-10: the paper's task)",
     )
     baseline_env_options(p)
+    p.add_argument(
+        "--randomize",
+        metavar="FILE",
+        help="evaluate under randomized physics: a YAML mapping of parameter to [low, high], the env "
+        "keyword randomize's (replaces the agent's own; docs/guide.md, 'Randomized physics')",
+    )
     p.add_argument("--episodes", type=episodes, default=100, help="episodes (default 100)")
     p.add_argument(
         "--stochastic", action="store_true", help="sample actions instead of the deterministic policy"

@@ -101,7 +101,12 @@ class SnakeEnv(gymnasium.Env):
     velocity) pair per movable joint, and the start places the root link's frame; ``joints`` and
     ``preset`` are ignored), ``world`` (None: the flat plane; or a world file, see ``worlds/`` and
     docs/worlds.md: its ground, friction and obstacles, built at each reset before the robot; raise
-    ``start``'s z on raised ground), ``render_mode`` (None or "rgb_array").
+    ``start``'s z on raised ground), ``randomize`` (None; a mapping of ``ground_friction``,
+    ``mass_scale``, ``effort_scale``, ``kp_scale``, ``kd_scale``, ``latency_steps``, ``obs_noise`` and
+    ``skin_friction_scale`` to ``[low, high]``, drawn at each reset from that reset's seed on a stream
+    of its own; reset's ``info["physics"]`` holds the draw; zero-width ranges at the nominal values are
+    the plain env, bit for bit; docs/guide.md, "Randomized physics"), ``render_mode`` (None or
+    "rgb_array").
 
     **Limits**: positions (start x, y; goals) within 10 km, start heights 0-100 m, reward weights within
     1e6, ``physics_steps_per_env_step`` at most 240, episodes at most 10^7 steps (``snakesim.limits.LIMITS``
@@ -142,6 +147,7 @@ class SnakeEnv(gymnasium.Env):
         world: str | os.PathLike[str] | None = _D["world"],
         terrain: Mapping[str, Any] | None = _D["terrain"],
         height_map: Mapping[str, Any] | None = _D["height_map"],
+        randomize: Mapping[str, Any] | None = _D["randomize"],
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -165,6 +171,7 @@ class SnakeEnv(gymnasium.Env):
             world=None if world is None else os.fspath(world),
             terrain=terrain,
             height_map=height_map,
+            randomize=randomize,
         )
         self._config_json = env_config(task=self.task, **self._kwargs)
         self._env = _core.Env(self._config_json)
@@ -336,6 +343,7 @@ class SnakeGoalEnv(SnakeEnv):
         world: str | os.PathLike[str] | None = _G["world"],
         terrain: Mapping[str, Any] | None = _G["terrain"],
         height_map: Mapping[str, Any] | None = _G["height_map"],
+        randomize: Mapping[str, Any] | None = _G["randomize"],
         render_mode: str | None = None,
     ) -> None:
         super().__init__(
@@ -356,6 +364,7 @@ class SnakeGoalEnv(SnakeEnv):
             world=world,
             terrain=terrain,
             height_map=height_map,
+            randomize=randomize,
             render_mode=render_mode,
         )
 

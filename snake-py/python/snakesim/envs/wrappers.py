@@ -148,8 +148,7 @@ class SteerAssist(gymnasium.Wrapper):
             raise TypeError(f"SteerAssist wraps a snakesim env, got {type(base).__name__}")
         if not isinstance(residual, bool):
             raise TypeError(f"residual must be True or False, got {residual!r}")
-        spec = json.dumps({"residual": residual, "near_goal": near_goal})
-        self.assist = _core.SteerAssist(spec, base._config_json)
+        self.assist = _core.SteerAssist(base._config_json, residual=residual, near_goal=near_goal)
         self._obs: np.ndarray | None = None
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):

@@ -1,0 +1,149 @@
+"""Randomized physics (the env keyword ``randomize``, issue 47 item 2) from Python."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import snakesim
+
+NOMINAL = {
+    "ground_friction": [0.5, 0.5],
+    "mass_scale": [1.0, 1.0],
+    "effort_scale": [1.0, 1.0],
+    "kp_scale": [1.0, 1.0],
+    "kd_scale": [1.0, 1.0],
+    "latency_steps": [0, 0],
+    "obs_noise": [0.0, 0.0],
+}
+WIDE = {
+    "ground_friction": [0.3, 0.9],
+    "mass_scale": [0.8, 1.2],
+    "effort_scale": [0.7, 1.0],
+    "kp_scale": [0.8, 1.2],
+    "kd_scale": [0.8, 1.2],
+    "latency_steps": [0, 2],
+    "obs_noise": [0.0, 0.02],
+}
+
+
+def rollout(env, seed: int, steps: int):
+    obs, info = env.reset(seed=seed)
+    out = [obs.copy()]
+    rng = np.random.default_rng(0)
+    for _ in range(steps):
+        obs, reward, terminated, truncated, info = env.step(
+            env.action_space.sample() * 0 + rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
+        )
+        out += [obs.copy(), np.float64(reward), terminated, truncated, info["distance"]]
+        if terminated or truncated:
+            obs, _ = env.reset()
+            out.append(obs.copy())
+    return out
+
+
+def test_zero_width_is_the_plain_env_bit_for_bit():
+    a = rollout(snakesim.SnakeGoalEnv(joints=5), 3, 200)
+    b = rollout(snakesim.SnakeGoalEnv(joints=5, randomize=NOMINAL), 3, 200)
+    assert len(a) == len(b)
+    for x, y in zip(a, b):
+        assert np.array_equal(np.asarray(x), np.asarray(y))
+
+
+def test_reset_info_holds_the_drawn_physics_under_the_given_keys():
+    env = snakesim.SnakeGoalEnv(joints=4, randomize=WIDE)
+    _, info = env.reset(seed=5)
+    physics = info["physics"]
+    assert set(physics) == set(WIDE)
+    for key, (low, high) in WIDE.items():
+        assert low <= physics[key] <= high
+    assert isinstance(physics["latency_steps"], int)
+    _, again = snakesim.SnakeGoalEnv(joints=4, randomize=WIDE).reset(seed=5)
+    assert again["physics"] == physics
+    _, other = env.reset(seed=6)
+    assert other["physics"] != physics
+    _, partial = snakesim.SnakeGoalEnv(joints=4, randomize={"mass_scale": [2.0, 2.0]}).reset(seed=1)
+    assert partial["physics"] == {"mass_scale": 2.0}
+    _, plain = snakesim.SnakeGoalEnv(joints=4).reset(seed=1)
+    assert "physics" not in plain
+
+
+@pytest.mark.parametrize(
+    ("randomize", "message"),
+    [
+        ({"mass_scale": [1.2, 0.8]}, "randomize.mass_scale: must have low <= high"),
+        ({"effort_scale": [float("nan"), 1.0]}, "randomize.effort_scale[0]: must be finite"),
+        ({"kp_scale": [-1.0, 1.0]}, "randomize.kp_scale: must lie within"),
+        ({"latency_steps": [0, 33]}, "randomize.latency_steps: must lie within"),
+        ({"latency_steps": [0, 1.5]}, "randomize.latency_steps: must be whole env steps"),
+        ({"skin_friction_scale": [1, 1]}, "randomize.skin_friction_scale: needs a body with skin friction"),
+        ({"mass": [1, 2]}, "mass"),
+    ],
+)
+def test_bad_ranges_are_one_line_value_errors(randomize, message):
+    with pytest.raises(ValueError, match="randomize") as error:
+        snakesim.SnakeGoalEnv(joints=3, randomize=randomize)
+    text = str(error.value)
+    assert message in text
+    assert "\n" not in text
+
+
+def test_evaluate_under_a_distribution(tmp_path):
+    spec = tmp_path / "wide.yaml"
+    spec.write_text("mass_scale: [0.8, 1.2]\nground_friction: [0.25, 1.0]\nlatency_steps: [0, 1]\n")
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "snakesim",
+            "evaluate",
+            "models/goal-10.safetensors",
+            "--randomize",
+            str(spec),
+            "--episodes",
+            "4",
+            "--json",
+            "-",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=snakesim.__file__.rsplit("/snake-py/", 1)[0],
+    )
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report["randomize"] == {
+        "mass_scale": [0.8, 1.2],
+        "ground_friction": [0.25, 1.0],
+        "latency_steps": [0, 1],
+    }
+    assert report["episodes"] == 4
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("mass_scale: [1.2, 0.8]\n")
+    out = tmp_path / "out.json"
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "snakesim",
+            "evaluate",
+            "models/goal-10.safetensors",
+            "--randomize",
+            str(bad),
+            "--episodes",
+            "4",
+            "--json",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=snakesim.__file__.rsplit("/snake-py/", 1)[0],
+    )
+    assert run.returncode != 0
+    assert "randomize.mass_scale" in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1
+    assert not out.exists()
