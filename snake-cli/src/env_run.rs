@@ -161,13 +161,15 @@ pub fn run(args: &EnvArgs) -> Result<()> {
             .expect("no skipped variants")
             .get_name(),
     )?;
+    let randomized = env.config().randomize.is_some();
     say!(
-        "{:>7}  {:>12}  {:>6}  {:>7}  {:>9}",
+        "{:>7}  {:>12}  {:>6}  {:>7}  {:>9}{}",
         "episode",
         "return",
         "length",
         "success",
-        "distance"
+        "distance",
+        if randomized { "  physics" } else { "" }
     )?;
     let (mut total_steps, mut successes) = (0u64, 0usize);
     let clock = Instant::now();
@@ -194,8 +196,22 @@ pub fn run(args: &EnvArgs) -> Result<()> {
             length += 1;
             if out.terminated || out.truncated {
                 successes += usize::from(out.info.success);
+                // With `randomize`, what the episode drew (its keys, in their order).
+                let physics: String = if randomized {
+                    let drawn: Vec<String> = env
+                        .physics()
+                        .values()
+                        .map(|(key, value)| match key {
+                            "latency_steps" => format!("{key} {value}"),
+                            _ => format!("{key} {value:.4}"),
+                        })
+                        .collect();
+                    format!("  {}", drawn.join(", "))
+                } else {
+                    String::new()
+                };
                 say!(
-                    "{episode:>7}  {ret:>12.1}  {length:>6}  {:>7}  {:>8.2}m",
+                    "{episode:>7}  {ret:>12.1}  {length:>6}  {:>7}  {:>8.2}m{physics}",
                     if out.info.success { "yes" } else { "no" },
                     out.info.distance
                 )?;

@@ -7,7 +7,7 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUnty
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use snake_core::env::{EnvConfig, Info, ObservationStructure, ResetOptions, SnakeEnv};
+use snake_core::env::{EnvConfig, Info, ObservationStructure, Physics, ResetOptions, SnakeEnv};
 use snake_core::{StartPose, StepBuffers, VecSnakeEnv};
 
 mod controllers;
@@ -64,6 +64,19 @@ fn info_dict<'py>(py: Python<'py>, info: &Info) -> PyResult<Bound<'py, PyDict>> 
     d.set_item("path_length", info.path_length)?;
     d.set_item("displacement", info.displacement)?;
     Ok(d)
+}
+
+/// The physics an episode drew, under `randomize`'s keys (the given ones only).
+fn physics_dict<'py>(py: Python<'py>, physics: &Physics) -> PyResult<Bound<'py, PyDict>> {
+    let p = PyDict::new(py);
+    for (key, value) in physics.values() {
+        if key == "latency_steps" {
+            p.set_item(key, value as u32)?;
+        } else {
+            p.set_item(key, value)?;
+        }
+    }
+    Ok(p)
 }
 
 /// A float vector from a numpy array of float32 or float64 (anything else is a TypeError).
@@ -244,16 +257,7 @@ impl Env {
             .map_err(to_py)?;
         let d = info_dict(py, &info)?;
         if let Some(physics) = physics {
-            // The drawn physics under `randomize`'s keys (the given ones only).
-            let p = PyDict::new(py);
-            for (key, value) in physics.values() {
-                if key == "latency_steps" {
-                    p.set_item(key, value as u32)?;
-                } else {
-                    p.set_item(key, value)?;
-                }
-            }
-            d.set_item("physics", p)?;
+            d.set_item("physics", physics_dict(py, &physics)?)?;
         }
         Ok((PyArray1::from_vec(py, obs), d))
     }
@@ -376,6 +380,20 @@ impl VecEnv {
     fn observation_structure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let structure = self.with(py, |e| e.config().observation_structure());
         structure_dict(py, structure)
+    }
+
+    /// The physics each env's current episode drew (a dict per env, `Env.reset`'s
+    /// `info["physics"]`), or None without `randomize`.
+    fn physics<'py>(&self, py: Python<'py>) -> PyResult<Option<Vec<Bound<'py, PyDict>>>> {
+        let drawn: Option<Vec<Physics>> = self.with(py, |envs| {
+            envs.config()
+                .randomize
+                .is_some()
+                .then(|| envs.envs().map(|e| *e.physics()).collect())
+        });
+        drawn
+            .map(|all| all.iter().map(|p| physics_dict(py, p)).collect())
+            .transpose()
     }
 
     /// reset(seed) -> obs of shape (num_envs, observation_dim); env i is seeded with seed + i.

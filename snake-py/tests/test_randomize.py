@@ -147,3 +147,43 @@ def test_evaluate_under_a_distribution(tmp_path):
     assert "randomize.mass_scale" in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_the_vector_envs_report_each_episodes_physics():
+    """``infos["physics"]`` of the native vector envs: every env's draw at reset, the autoreset envs'
+    in step, each env's equal to a single env's seeded ``s + i`` (the Rust vector env's own test holds
+    the episodes bit for bit)."""
+    import gymnasium
+    from snakesim.envs.sb3 import SnakeVecEnv
+    from snakesim.envs.vector import SnakeVectorEnv
+
+    kwargs = {"task": "goal", "joints": 5, "max_episode_steps": 3}
+    kwargs["randomize"] = {"mass_scale": [0.5, 1.5], "latency_steps": [0, 2]}
+    vec = SnakeVectorEnv(3, **kwargs)
+    _, infos = vec.reset(seed=11)
+    assert list(infos["_physics"]) == [True] * 3
+    single = {k: v for k, v in kwargs.items() if k != "task"}
+    for i in range(3):
+        _, info = gymnasium.make("snakesim/SnakeGoal-v0", **single).reset(seed=11 + i)
+        assert infos["physics"]["mass_scale"][i] == info["physics"]["mass_scale"]
+        assert infos["physics"]["latency_steps"][i] == info["physics"]["latency_steps"]
+    zeros = np.zeros((3, 3), np.float32)
+    for _ in range(2):
+        _, _, _, _, infos = vec.step(zeros)
+        assert "physics" not in infos
+    _, _, _, truncated, infos = vec.step(zeros)
+    assert truncated.all() and list(infos["_physics"]) == [True] * 3
+    draws = infos["physics"]["mass_scale"]
+    assert all(0.5 <= m <= 1.5 for m in draws) and len(set(draws)) == 3
+
+    sb3 = SnakeVecEnv(2, **kwargs)
+    sb3.seed(11)
+    sb3.reset()
+    assert [i["physics"]["mass_scale"] for i in sb3.reset_infos] == list(
+        SnakeVectorEnv(2, **kwargs).reset(seed=11)[1]["physics"]["mass_scale"]
+    )
+    for _ in range(3):
+        sb3.step_async(np.zeros((2, 3), np.float32))
+        _, _, dones, step_infos = sb3.step_wait()
+    assert dones.all() and all("physics" in info for info in step_infos)
+    assert SnakeVectorEnv(2, task="goal", joints=5).reset(seed=1)[1] == {}

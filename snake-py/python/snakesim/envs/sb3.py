@@ -53,6 +53,10 @@ class SnakeVecEnv(VecEnv):
         obs = self._core.reset(seed)
         self._reset_seeds()
         self._reset_options()
+        physics = self._core.physics()
+        if physics is not None:
+            # SB3's reset returns no infos; its VecEnvs keep them in reset_infos.
+            self.reset_infos = [{"physics": p} for p in physics]
         return obs
 
     def seed(self, seed: int | None = None) -> Sequence[None | int]:
@@ -71,10 +75,14 @@ class SnakeVecEnv(VecEnv):
         obs, rewards, terminated, truncated, finals = self._core.step(action_array(self._actions))
         self._actions = None
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
+        physics = self._core.physics() if finals else None
         for index, final_obs, final_info in finals:
             info = dict(final_info)
             info["terminal_observation"] = final_obs
             info["TimeLimit.truncated"] = bool(truncated[index] and not terminated[index])
+            if physics is not None:
+                # The physics the next episode (reset in this step) drew.
+                info["physics"] = physics[index]
             infos[index] = info
         return obs, rewards.astype(np.float32), terminated | truncated, infos
 

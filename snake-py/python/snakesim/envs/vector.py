@@ -27,7 +27,9 @@ class SnakeVectorEnv(VectorEnv):
     Worlds step in parallel on Rust threads (no subprocesses, no pickling). Finished episodes reset in
     the same step (``autoreset_mode`` SAME_STEP): the returned observation is the new episode's first,
     and ``infos["final_obs"]`` / ``infos["final_info"]`` (masked by ``infos["_final_obs"]``) hold the
-    finished episode's last observation and info. ``reset(seed=s)`` seeds env i with ``s + i``.
+    finished episode's last observation and info. ``reset(seed=s)`` seeds env i with ``s + i``. With
+    ``randomize``, ``infos["physics"]`` (masked by ``infos["_physics"]``) holds what each episode that
+    began drew: every env's at ``reset``, the reset ones' in ``step``.
 
     Keyword arguments are those of :class:`snakesim.SnakeEnv` (without ``render_mode``).
     """
@@ -56,13 +58,21 @@ class SnakeVectorEnv(VectorEnv):
         if seed is None and not hasattr(self, "_seeded"):
             seed = int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
         self._seeded = True
-        return self._core.reset(seed), {}
+        obs = self._core.reset(seed)
+        infos: dict[str, Any] = {}
+        for index, physics in enumerate(self._core.physics() or ()):
+            infos = self._add_info(infos, {"physics": physics}, index)
+        return obs, infos
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         obs, rewards, terminated, truncated, finals = self._core.step(action_array(actions))
         infos: dict[str, Any] = {}
+        physics = self._core.physics() if finals else None
         for index, final_obs, final_info in finals:
             infos = self._add_info(infos, {"final_obs": final_obs, "final_info": final_info}, index)
+            if physics is not None:
+                # The physics of the episode that began in this step (same-step autoreset).
+                infos = self._add_info(infos, {"physics": physics[index]}, index)
         return obs, rewards, terminated, truncated, infos
 
     def close_extras(self, **kwargs: Any) -> None:
