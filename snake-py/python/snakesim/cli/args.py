@@ -119,32 +119,13 @@ def baseline_env_options(p: argparse.ArgumentParser) -> None:
 def read_randomize(path: str | os.PathLike) -> dict:
     """The ``randomize`` mapping of a YAML file (parameter -> [low, high], the env keyword's), read
     with the bounded reader; UserError naming the file otherwise."""
-    import json
-
-    from snakesim import _core
     from snakesim.cli.errors import UserError
-    from snakesim.files import FileError, read_text
+    from snakesim.runs.config import ConfigError, load_yaml
 
-    name = os.fspath(path)
     try:
-        text = read_text(path, "config_bytes")
-    except FileError as error:
-        raise UserError(f"--randomize {error}") from None
-    except FileNotFoundError:
-        raise UserError(f"--randomize {name} does not exist") from None
-    except IsADirectoryError:
-        raise UserError(f"--randomize {name} is a directory") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise UserError(f"--randomize: cannot read {name}: {error}") from None
-    try:
-        data = json.loads(_core.parse_yaml(text))
-    except ValueError as error:
-        raise UserError(f"--randomize {name}: {error}") from None
-    if not isinstance(data, dict):
-        raise UserError(
-            f"--randomize {name} must hold a mapping of parameter to [low, high], not {type(data).__name__}"
-        )
-    return data
+        return load_yaml(path, "--randomize")
+    except ConfigError as error:
+        raise UserError(str(error)) from None
 
 
 def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLike, str]] = ()):

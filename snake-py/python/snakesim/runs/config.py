@@ -123,26 +123,26 @@ def env_kwargs(config: Mapping[str, Any]) -> dict[str, Any]:
     return {"joints": config["joints"], "preset": config["preset"], **config.get("env", {})}
 
 
-def load_yaml(path: str | os.PathLike) -> dict[str, Any]:
+def load_yaml(path: str | os.PathLike, what: str = "config file") -> dict[str, Any]:
     """The mapping in a YAML file (not yet validated), parsed by the same YAML rules as ``--set``;
-    raises ConfigError with the file's name."""
+    raises ConfigError with ``what`` (``config file``, a flag) and the file's name."""
     name = os.fspath(path)
     try:
         text = read_text(path, "config_bytes")
     except FileError as error:
-        raise ConfigError(f"config file {error}") from None
+        raise ConfigError(f"{what} {error}") from None
     except FileNotFoundError:
-        raise ConfigError(f"config file {name} does not exist") from None
+        raise ConfigError(f"{what} {name} does not exist") from None
     except IsADirectoryError:
-        raise ConfigError(f"config file {name} is a directory") from None
+        raise ConfigError(f"{what} {name} is a directory") from None
     except (OSError, UnicodeDecodeError) as error:
-        raise ConfigError(f"cannot read config file {name}: {error}") from None
+        raise ConfigError(f"cannot read {what} {name}: {error}") from None
     try:
         data = json.loads(_core.parse_yaml(text))
     except ValueError as error:
-        raise ConfigError(f"config file {name}: {error}") from None
+        raise ConfigError(f"{what} {name}: {error}") from None
     if not isinstance(data, dict):
-        raise ConfigError(f"config file {name} must hold a mapping of keys, not {type(data).__name__}")
+        raise ConfigError(f"{what} {name} must hold a mapping of keys, not {type(data).__name__}")
     return data
 
 
