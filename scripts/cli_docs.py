@@ -15,7 +15,18 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 PAGE = REPO / "docs" / "cli.md"
 SNAKE_CLI = ("run", "atlas", "env", "bench", "train")
-SNAKESIM = ("train", "evaluate", "plot", "replay", "export", "sweep", "search", "convert", "view")
+SNAKESIM = (
+    "train",
+    "evaluate",
+    "plot",
+    "replay",
+    "export",
+    "sweep",
+    "search",
+    "convert",
+    "view",
+    "calibrate",
+)
 
 INTRO = """# The command lines
 

@@ -46,6 +46,7 @@ pub mod gait;
 pub mod limits;
 pub mod math;
 pub mod robot;
+pub mod run_targets;
 pub mod skin;
 pub mod snake;
 pub mod urdf;

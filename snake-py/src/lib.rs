@@ -14,6 +14,7 @@ mod controllers;
 mod evaluation;
 mod lock;
 mod native;
+mod simulate;
 
 /// snake-core's errors as Python exceptions: bad input is a ValueError, a failing engine a RuntimeError.
 fn to_py(error: snake_core::Error) -> PyErr {
@@ -479,5 +480,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     controllers::register(m)?;
     evaluation::register(m)?;
     lock::register(m)?;
+    simulate::register(m)?;
     Ok(())
 }

@@ -8,6 +8,7 @@
     snakesim view episode.rrd --serve                        # Rerun's web viewer on 127.0.0.1
     snakesim sweep CONFIG.yaml [...] --seeds K [--grid KEY=V1,V2] --out sweeps/NAME [--address HOST:PORT]
     snakesim search CONFIG.yaml --space space.yaml --trials T --out sweeps/NAME
+    snakesim calibrate --robot R --targets T.csv --log L.csv --fit motors.kp=0.05:1 --out FITTED.yaml
 
 ``snakesim COMMAND --help`` lists every option. Errors print one line on stderr and exit non-zero
 (2 for bad usage, 1 for anything else, 130 after Ctrl-C, 143 after SIGTERM).
@@ -22,7 +23,7 @@ import sys
 import tempfile
 import threading
 
-from snakesim.cli import evaluate, export, plot, replay, search, sweep, train, view
+from snakesim.cli import calibrate, evaluate, export, plot, replay, search, sweep, train, view
 from snakesim.cli.args import Parser
 from snakesim.cli.errors import UserError, report
 
@@ -33,7 +34,7 @@ def build_parser() -> Parser:
         description="Train, evaluate, plot and replay PPO agents of the 'Simulating Snakes' snake.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=Parser)
-    for command in (train, evaluate, plot, sweep, search, replay, export, view):
+    for command in (train, evaluate, plot, sweep, search, replay, export, view, calibrate):
         command.add_parser(sub)
     return parser
 

@@ -1,0 +1,262 @@
+//! A robot driven by a table of joint targets, as `snake-cli run --robot R --targets T.csv` drives it,
+//! with named physics parameters replaced ([`Overrides`]): the simulation that `snakesim calibrate`
+//! fits to a logged run.
+//!
+//! [`run_targets`] builds the world and the robot exactly as [`Robot::in_world`] does for `snake-cli
+//! run` (the robot file's values, with the overrides written into the [`RobotSpec`] and the
+//! [`WorldSpec`] first, so a fitted robot file run by `snake-cli run` gives the same bits), then sets
+//! one row of targets before each physics step and records the base pose and the joint angles after
+//! it: the columns of `snake-cli run --output`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::env::Physics;
+use crate::error::{invalid_at, Result};
+use crate::limits::{MAX_MOTOR_VELOCITY, MAX_PHYSICS_SCALE, MAX_WORLD_FRICTION};
+use crate::world::Dynamics;
+use crate::world_file::WorldSpec;
+use crate::{Body, Robot, RobotSpec, StartPose};
+
+/// Physics parameters that replace a robot file's (and the world's ground friction); every key left
+/// out keeps the file's value. The serialized names are `snakesim calibrate --fit`'s keys.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Overrides {
+    /// Position gain of every motor (`motors: kp`).
+    #[serde(rename = "motors.kp", default, skip_serializing_if = "Option::is_none")]
+    pub kp: Option<f64>,
+    /// Velocity gain of every motor (`motors: kd`).
+    #[serde(rename = "motors.kd", default, skip_serializing_if = "Option::is_none")]
+    pub kd: Option<f64>,
+    /// Maximum velocity of every motor (`motors: max_velocity`; per-joint values are replaced too).
+    #[serde(
+        rename = "motors.max_velocity",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub max_velocity: Option<f64>,
+    /// The ground's lateral friction (a world file's `ground_friction`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground_friction: Option<f64>,
+    /// Lateral friction of the base and every link (`changeDynamics(lateralFriction=...)` after the
+    /// robot is loaded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lateral_friction: Option<f64>,
+    /// Anisotropic friction along x of every link (`anisotropic_friction: [x, y, z]`; the axes not
+    /// given keep each link's value, 1 where it has none).
+    #[serde(
+        rename = "anisotropic_friction.x",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub anisotropic_x: Option<f64>,
+    /// Anisotropic friction along y of every link.
+    #[serde(
+        rename = "anisotropic_friction.y",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub anisotropic_y: Option<f64>,
+    /// Anisotropic friction along z of every link.
+    #[serde(
+        rename = "anisotropic_friction.z",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub anisotropic_z: Option<f64>,
+    /// Forward skin friction coefficient of every link that has skin friction.
+    #[serde(
+        rename = "skin_friction.forward",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub skin_forward: Option<f64>,
+    /// Backward skin friction coefficient of every link that has skin friction.
+    #[serde(
+        rename = "skin_friction.backward",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub skin_backward: Option<f64>,
+    /// Transverse skin friction coefficient of every link that has skin friction.
+    #[serde(
+        rename = "skin_friction.transverse",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub skin_transverse: Option<f64>,
+    /// Factor on the mass of the base and every link (the randomized physics' `mass_scale`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_scale: Option<f64>,
+}
+
+fn check(key: &str, v: Option<f64>, low: f64, high: f64, open_low: bool) -> Result<()> {
+    match v {
+        Some(x) if !(x.is_finite() && x <= high && if open_low { x > low } else { x >= low }) => {
+            let left = if open_low { '(' } else { '[' };
+            Err(invalid_at(
+                key,
+                format!("must be in {left}{low}, {high}], got {x}"),
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
+impl Overrides {
+    /// Checks every value's range; the message names the key.
+    pub fn validate(&self) -> Result<()> {
+        let big = 1e6;
+        check("motors.kp", self.kp, 0.0, big, false)?;
+        check("motors.kd", self.kd, 0.0, big, false)?;
+        check(
+            "motors.max_velocity",
+            self.max_velocity,
+            0.0,
+            MAX_MOTOR_VELOCITY,
+            true,
+        )?;
+        check(
+            "ground_friction",
+            self.ground_friction,
+            0.0,
+            MAX_WORLD_FRICTION,
+            false,
+        )?;
+        check(
+            "lateral_friction",
+            self.lateral_friction,
+            0.0,
+            MAX_WORLD_FRICTION,
+            false,
+        )?;
+        for (key, v) in [
+            ("anisotropic_friction.x", self.anisotropic_x),
+            ("anisotropic_friction.y", self.anisotropic_y),
+            ("anisotropic_friction.z", self.anisotropic_z),
+            ("skin_friction.forward", self.skin_forward),
+            ("skin_friction.backward", self.skin_backward),
+            ("skin_friction.transverse", self.skin_transverse),
+        ] {
+            check(key, v, 0.0, big, false)?;
+        }
+        check("mass_scale", self.mass_scale, 0.0, MAX_PHYSICS_SCALE, true)
+    }
+
+    /// Writes the robot-file parameters into `spec` and the ground friction into `world`.
+    pub fn apply_to_spec(&self, spec: &mut RobotSpec, world: &mut WorldSpec) -> Result<()> {
+        self.validate()?;
+        if let Some(kp) = self.kp {
+            spec.motors.kp = kp;
+        }
+        if let Some(kd) = self.kd {
+            spec.motors.kd = kd;
+        }
+        if let Some(v) = self.max_velocity {
+            spec.motors.max_velocity = Some(v);
+            spec.max_velocities.iter_mut().for_each(|m| *m = None);
+        }
+        if let Some(mu) = self.ground_friction {
+            world.ground_friction = Some(mu);
+        }
+        let axes = [self.anisotropic_x, self.anisotropic_y, self.anisotropic_z];
+        if axes.iter().any(Option::is_some) {
+            for a in &mut spec.anisotropic_friction {
+                let mut v = a.unwrap_or([1.0; 3]);
+                for (slot, given) in v.iter_mut().zip(axes) {
+                    if let Some(g) = given {
+                        *slot = g;
+                    }
+                }
+                *a = Some(v);
+            }
+        }
+        let skin = [self.skin_forward, self.skin_backward, self.skin_transverse];
+        if skin.iter().any(Option::is_some) {
+            if spec.skin_friction.iter().all(Option::is_none) {
+                return Err(invalid_at(
+                    "skin_friction",
+                    "the robot file sets no skin_friction to fit",
+                ));
+            }
+            for s in spec.skin_friction.iter_mut().flatten() {
+                s.forward = self.skin_forward.unwrap_or(s.forward);
+                s.backward = self.skin_backward.unwrap_or(s.backward);
+                s.transverse = self.skin_transverse.unwrap_or(s.transverse);
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets what a robot file cannot say on a freshly built body: the links' lateral friction and
+    /// the mass factor (as the randomized physics set it, [`Physics::apply`]).
+    pub fn apply_to_body(&self, body: &mut Body) -> Result<()> {
+        if let Some(mu) = self.lateral_friction {
+            let id = body.id();
+            let links = body.world().num_joints(id)?;
+            let d = Dynamics {
+                lateral_friction: Some(mu),
+                ..Dynamics::default()
+            };
+            for part in std::iter::once(None).chain((0..links).map(Some)) {
+                body.world_mut().change_dynamics(id, part, &d)?;
+            }
+        }
+        Physics {
+            mass_scale: self.mass_scale,
+            ..Physics::default()
+        }
+        .apply(body)
+    }
+}
+
+/// The recorded run: after every physics step, the base pose and the joint angles.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Trajectory {
+    /// `base[k]`: x, y, z, qx, qy, qz, qw of the base after step k + 1 (`snake-cli run --output`'s
+    /// `base_*` columns).
+    pub base: Vec<[f64; 7]>,
+    /// Joint angles after each step, row-major (`steps x joints`; the `q*` columns).
+    pub joints: Vec<f64>,
+}
+
+/// Builds `spec` at `start` in `world` with `overrides` applied and drives it with `targets`
+/// (row-major, one row of the robot's movable joints per physics step, in its joint order).
+pub fn run_targets(
+    spec: &RobotSpec,
+    start: StartPose,
+    world: &WorldSpec,
+    overrides: &Overrides,
+    targets: &[f64],
+) -> Result<Trajectory> {
+    let mut spec = spec.clone();
+    let mut world = world.clone();
+    overrides.apply_to_spec(&mut spec, &mut world)?;
+    let mut body = Body::Robot(Robot::in_world(&spec, start, &world)?);
+    overrides.apply_to_body(&mut body)?;
+    let n = body.sim().joints();
+    if n == 0 || !targets.len().is_multiple_of(n) {
+        return Err(invalid_at(
+            "targets",
+            format!(
+                "{} values are not whole rows of {n} movable joints",
+                targets.len()
+            ),
+        ));
+    }
+    let steps = targets.len() / n;
+    let mut out = Trajectory {
+        base: Vec::with_capacity(steps),
+        joints: vec![0.0; steps * n],
+    };
+    for (row, q) in targets.chunks(n).zip(out.joints.chunks_mut(n)) {
+        let sim = body.sim_mut();
+        sim.set_targets(row)?;
+        sim.step()?;
+        let b = sim.base_state()?;
+        let (p, o) = (b.pose.position, b.pose.orientation.coords);
+        out.base.push([p.x, p.y, p.z, o.x, o.y, o.z, o.w]);
+        sim.read_joints(q, &mut [])?;
+    }
+    Ok(out)
+}

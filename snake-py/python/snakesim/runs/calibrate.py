@@ -1,0 +1,404 @@
+"""Calibration from a log (``snakesim calibrate``): physics parameters of a robot file fitted so that
+the simulated run reproduces a logged one.
+
+The log is a trajectory CSV as ``snake-cli run --output`` writes it (``step,t,base_x,base_y,base_z,
+base_qx,base_qy,base_qz,base_qw,q0..q{M-1}``, one row per 1/240 s physics step, the state after that
+step) and the targets the joint-target CSV that drove it (``snake-cli run --targets``: ``step,<joint
+names>``). Each candidate is simulated by ``_core.simulate_robot``, the run of ``snake-cli run --robot R
+--targets T`` with the fitted keys written into the robot file and the world, so a fitted value run
+by ``snake-cli run`` gives the simulated trajectory bit for bit.
+
+Error (:func:`trajectory_error`): the mean over the log's steps of
+
+    |p_sim - p_log|^2 / POSITION_SCALE^2  +  mean_j (q_sim_j - q_log_j)^2 / ANGLE_SCALE^2
+
+with p the base position (x, y, z) and q the joint angles, POSITION_SCALE 1 cm and ANGLE_SCALE
+0.001 rad (about a 12-bit encoder's step): an error of 1 is a root-mean-square miss of 1 cm of the base,
+or of 0.001 rad of every joint. The joints weigh this much because they pin the motor parameters
+whatever the ground does (docs/calibration.md: without it, kp and the ground friction trade off).
+
+Optimizer: CMA-ES (the ``cmaes`` package, bounded) over the fitted keys mapped to [0, 1] (linearly, or
+logarithmically where the lower bound is > 0: gains and frictions are scales), each generation's
+candidates simulated in parallel processes.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import json
+import math
+import multiprocessing
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from snakesim import _core
+from snakesim.files import read_text
+
+#: The keys ``--fit`` takes (snake-core's ``run_targets::Overrides``).
+FIT_KEYS: tuple[str, ...] = (
+    "motors.kp",
+    "motors.kd",
+    "motors.max_velocity",
+    "ground_friction",
+    "lateral_friction",
+    "anisotropic_friction.x",
+    "anisotropic_friction.y",
+    "anisotropic_friction.z",
+    "skin_friction.forward",
+    "skin_friction.backward",
+    "skin_friction.transverse",
+    "mass_scale",
+)
+#: Keys a robot file cannot hold: reported in the JSON and as a comment of the fitted robot file.
+NOT_IN_ROBOT_FILE = ("ground_friction", "lateral_friction", "mass_scale")
+#: Most simulations of one calibration (``--max-evals``).
+MAX_EVALS = 100_000
+POSITION_SCALE = 0.01  # m
+ANGLE_SCALE = 0.001  # rad
+BASE_COLUMNS = ("step", "t", "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
+#: The error of a candidate whose simulation fails (a numerically unstable one).
+FAILED = 1e12
+
+
+class CalibrationError(ValueError):
+    """Bad input: the message names the file or key and the problem."""
+
+
+def parse_fit(items: Sequence[str]) -> dict[str, tuple[float, float]]:
+    """``KEY=LOW:HIGH`` items as {key: (low, high)}, checked."""
+    bounds: dict[str, tuple[float, float]] = {}
+    for item in items:
+        key, eq, rng = item.partition("=")
+        key = key.strip()
+        if not eq or ":" not in rng:
+            raise CalibrationError(f"--fit {item!r}: expected KEY=LOW:HIGH")
+        if key not in FIT_KEYS:
+            raise CalibrationError(f"--fit {key!r}: unknown key (known: {', '.join(FIT_KEYS)})")
+        if key in bounds:
+            raise CalibrationError(f"--fit {key}: given twice")
+        low_s, _, high_s = rng.partition(":")
+        try:
+            low, high = float(low_s), float(high_s)
+        except ValueError:
+            raise CalibrationError(f"--fit {key}: {rng!r} is not LOW:HIGH numbers") from None
+        if not (math.isfinite(low) and math.isfinite(high)):
+            raise CalibrationError(f"--fit {key}: bounds must be finite, got {low}:{high}")
+        if not low < high:
+            raise CalibrationError(f"--fit {key}: the lower bound {low} is not below the upper bound {high}")
+        if low < 0:
+            raise CalibrationError(f"--fit {key}: bounds must be >= 0, got {low}:{high}")
+        bounds[key] = (low, high)
+    if not bounds:
+        raise CalibrationError("give at least one --fit KEY=LOW:HIGH")
+    return bounds
+
+
+def _numbers(cells: list[str], file: str, line: int, names: Sequence[str]) -> list[float]:
+    out = []
+    for name, cell in zip(names, cells):
+        try:
+            v = float(cell)
+        except ValueError:
+            raise CalibrationError(f"{file}:{line}: {name}: {cell[:40]!r} is not a number") from None
+        if not math.isfinite(v):
+            raise CalibrationError(f"{file}:{line}: {name}: {cell[:40]!r} is not a finite number")
+        out.append(v)
+    return out
+
+
+def _rows(path: str | os.PathLike, what: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    file = os.fspath(path)
+    try:
+        text = read_text(path, "csv_bytes")
+    except (OSError, ValueError) as error:
+        raise CalibrationError(f"{what} {file}: {getattr(error, 'strerror', None) or error}") from None
+    lines = text.splitlines()
+    if not lines:
+        raise CalibrationError(f"{file}: empty; expected a header")
+    header = [c.strip() for c in lines[0].split(",")]
+    rows = [(i + 1, [c.strip() for c in ln.split(",")]) for i, ln in enumerate(lines) if i and ln.strip()]
+    if not rows:
+        raise CalibrationError(f"{file}: no rows after the header")
+    for line, cells in rows:
+        if len(cells) != len(header):
+            raise CalibrationError(f"{file}:{line}: {len(cells)} cells, the header has {len(header)}")
+    return header, rows
+
+
+def _check_steps(file: str, rows: list[tuple[int, list[str]]]) -> None:
+    for k, (line, cells) in enumerate(rows, start=1):
+        if cells[0] != str(k):
+            raise CalibrationError(
+                f"{file}:{line}: step {cells[0][:20]!r}, expected {k} "
+                "(rows sorted, one per physics step, from 1)"
+            )
+
+
+def read_targets(path: str | os.PathLike, joints: Sequence[str]) -> np.ndarray:
+    """The targets CSV as (steps, joints) in the robot's joint order."""
+    file = os.fspath(path)
+    header, rows = _rows(path, "--targets")
+    if header[0] != "step":
+        raise CalibrationError(f"{file}:1: the first column must be 'step'")
+    names = header[1:]
+    for n in names:
+        if n not in joints:
+            raise CalibrationError(f"{file}:1: column {n[:40]!r} is not a movable joint of the robot")
+    if sorted(names) != sorted(joints):
+        missing = [j for j in joints if j not in names]
+        raise CalibrationError(f"{file}:1: no column (or two) for joint(s) {', '.join(missing) or names}")
+    _check_steps(file, rows)
+    order = [names.index(j) for j in joints]
+    data = np.array([_numbers(c[1:], file, ln, names) for ln, c in rows], dtype=np.float64)
+    return np.ascontiguousarray(data[:, order])
+
+
+def read_log(path: str | os.PathLike, joints: int, steps: int) -> np.ndarray:
+    """The logged trajectory as (steps, 7 + joints): base x, y, z, qx, qy, qz, qw, then the joints."""
+    file = os.fspath(path)
+    header, rows = _rows(path, "--log")
+    expected = [*BASE_COLUMNS, *(f"q{j}" for j in range(joints))]
+    if header != expected:
+        q = sum(1 for h in header if h.startswith("q") and h[1:].isdigit())
+        if header[: len(BASE_COLUMNS)] == list(BASE_COLUMNS) and q != joints:
+            raise CalibrationError(f"{file}:1: {q} joint columns, the robot has {joints} movable joints")
+        raise CalibrationError(
+            f"{file}:1: expected the header {','.join(expected[:10])},... (snake-cli run --output)"
+        )
+    _check_steps(file, rows)
+    if len(rows) != steps:
+        raise CalibrationError(f"{file}: {len(rows)} rows, the targets have {steps} (one per physics step)")
+    data = np.array([_numbers(c[2:], file, ln, header[2:]) for ln, c in rows], dtype=np.float64)
+    return data
+
+
+def trajectory_error(base: np.ndarray, joints: np.ndarray, log: np.ndarray) -> float:
+    """The normalised error of a simulated run against the log (the module's docstring)."""
+    dp = base[:, :3] - log[:, :3]
+    dq = joints - log[:, 7:]
+    value = float(np.mean(np.sum(dp * dp, axis=1)) / POSITION_SCALE**2)
+    if dq.size:
+        value += float(np.mean(dq * dq) / ANGLE_SCALE**2)
+    return value if math.isfinite(value) else FAILED
+
+
+@dataclass
+class Problem:
+    """A calibration's inputs, read and checked."""
+
+    robot: str
+    targets: np.ndarray
+    log: np.ndarray
+    world: str | None = None
+    start: tuple[float, float, float, float] | None = None
+    fixed: dict[str, float] = field(default_factory=dict)
+
+    def simulate(self, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+        return _core.simulate_robot(
+            self.robot, self.targets, self.world, self.start, json.dumps({**self.fixed, **values})
+        )
+
+    def error(self, values: dict[str, float]) -> float:
+        try:
+            base, joints = self.simulate(values)
+        except RuntimeError:  # the engine failed (an unstable candidate)
+            return FAILED
+        return trajectory_error(base, joints, self.log)
+
+
+class Space:
+    """The fitted keys' bounds and their map to the optimizer's [0, 1] (log where low > 0)."""
+
+    def __init__(self, bounds: dict[str, tuple[float, float]]) -> None:
+        self.keys = list(bounds)
+        self.bounds = bounds
+
+    def to_values(self, x: np.ndarray) -> dict[str, float]:
+        out = {}
+        for key, u in zip(self.keys, np.clip(x, 0.0, 1.0)):
+            low, high = self.bounds[key]
+            if low > 0:
+                out[key] = float(math.exp(math.log(low) + u * (math.log(high) - math.log(low))))
+            else:
+                out[key] = float(low + u * (high - low))
+        return out
+
+
+_WORKER: Problem | None = None
+
+
+def _init_worker(problem: Problem) -> None:
+    global _WORKER
+    _WORKER = problem
+
+
+def _worker_error(values: dict[str, float]) -> float:
+    assert _WORKER is not None
+    return _WORKER.error(values)
+
+
+def calibrate(
+    problem: Problem,
+    bounds: dict[str, tuple[float, float]],
+    *,
+    max_evals: int = 600,
+    workers: int = 1,
+    seed: int = 0,
+    tolerance: float = 1e-3,
+    progress: Callable[[int, float], None] | None = None,
+) -> dict[str, Any]:
+    """Fits ``bounds``' keys with CMA-ES; returns the JSON result (``fitted``, ``error_before`` (the
+    robot file's own values), ``error_after``, ``simulations``, ``wall_seconds``, ``bounds``, ...)."""
+    from cmaes import CMA
+
+    if not 1 <= max_evals <= MAX_EVALS:
+        raise CalibrationError(f"--max-evals must be in [1, {MAX_EVALS}], got {max_evals}")
+    clock = time.monotonic()
+    space = Space(bounds)
+    dim = len(space.keys)
+    optimizer = CMA(
+        mean=np.full(dim, 0.5),
+        sigma=0.3,
+        bounds=np.array([[0.0, 1.0]] * dim),
+        seed=seed,
+        population_size=max(8, 4 + int(3 * math.log(dim))),
+    )
+    error_before = problem.error({})
+    simulations = 1
+    best_x, best_error = np.full(dim, 0.5), math.inf
+    generations = 0
+    pool = None
+    if workers > 1:
+        pool = concurrent.futures.ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_init_worker,
+            initargs=(problem,),
+        )
+    try:
+        while simulations < max_evals + 1:
+            n = min(optimizer.population_size, max_evals + 1 - simulations)
+            if n < optimizer.population_size:
+                break  # a partial generation cannot be told to CMA-ES
+            xs = [optimizer.ask() for _ in range(n)]
+            candidates = [space.to_values(x) for x in xs]
+            errors = (
+                list(pool.map(_worker_error, candidates)) if pool else [problem.error(c) for c in candidates]
+            )
+            simulations += n
+            generations += 1
+            optimizer.tell(list(zip(xs, errors)))
+            k = int(np.argmin(errors))
+            if errors[k] < best_error:
+                best_x, best_error = xs[k], errors[k]
+            if progress:
+                progress(simulations, best_error)
+            # Converged: the generation's candidates all lie within `tolerance` (of [0, 1]) of each other.
+            spread = float(np.max(np.ptp(np.array(xs), axis=0)))
+            if optimizer.should_stop() or spread < tolerance:
+                break
+    finally:
+        if pool:
+            pool.shutdown(cancel_futures=True)
+    fitted = space.to_values(best_x)
+    return {
+        "fitted": fitted,
+        "error_before": error_before,
+        "error_after": best_error,
+        "simulations": simulations,
+        "generations": generations,
+        "wall_seconds": time.monotonic() - clock,
+        "bounds": {k: list(v) for k, v in bounds.items()},
+        "workers": workers,
+        "seed": seed,
+        "error": {
+            "definition": "mean over steps of |dp|^2/position_scale^2 "
+            "+ mean over joints of dq^2/angle_scale^2",
+            "position_scale_m": POSITION_SCALE,
+            "angle_scale_rad": ANGLE_SCALE,
+        },
+        "steps": int(problem.targets.shape[0]),
+        "not_in_robot_file": [k for k in fitted if k in NOT_IN_ROBOT_FILE],
+    }
+
+
+def _yaml_value(v: Any) -> str:
+    return json.dumps(v)  # JSON is YAML's flow style
+
+
+def fitted_robot_yaml(robot: str | os.PathLike, fitted: dict[str, float], out: str | os.PathLike) -> str:
+    """The robot file ``robot`` with ``fitted`` written in, as YAML text for ``out`` (its ``urdf:``
+    path made relative to ``out``'s folder). Keys a robot file cannot hold are comments."""
+    robot = Path(robot)
+    if robot.suffix.lower() in (".yaml", ".yml"):
+        data = json.loads(_core.parse_yaml(read_text(robot, "config_bytes")))
+        urdf = robot.parent / data["urdf"]
+    else:
+        data, urdf = {}, robot
+    data["urdf"] = os.path.relpath(os.path.realpath(urdf), os.path.realpath(Path(out).parent))
+    motors = dict(data.get("motors") or {})
+    for key in ("kp", "kd", "max_velocity"):
+        if f"motors.{key}" in fitted:
+            motors[key] = fitted[f"motors.{key}"]
+    if "motors.max_velocity" in fitted:
+        for settings in (data.get("joints") or {}).values():
+            if isinstance(settings, dict):
+                settings.pop("max_velocity", None)
+    if motors:
+        data["motors"] = motors
+    axes = [fitted.get(f"anisotropic_friction.{a}") for a in "xyz"]
+    if any(v is not None for v in axes):
+        old = data.get("anisotropic_friction") or [1.0, 1.0, 1.0]
+        data["anisotropic_friction"] = [o if v is None else v for o, v in zip(old, axes)]
+    skin = {
+        k: fitted[f"skin_friction.{k}"]
+        for k in ("forward", "backward", "transverse")
+        if f"skin_friction.{k}" in fitted
+    }
+    if skin:
+        if data.get("skin_friction"):
+            data["skin_friction"] = {**data["skin_friction"], **skin}
+        for settings in (data.get("links") or {}).values():
+            if isinstance(settings, dict) and settings.get("skin_friction"):
+                settings["skin_friction"] = {**settings["skin_friction"], **skin}
+    lines = [f"# {robot.name} with values fitted by snakesim calibrate (docs/calibration.md)."]
+    for key in NOT_IN_ROBOT_FILE:
+        if key in fitted:
+            where = "a world file's ground_friction" if key == "ground_friction" else "no robot-file key"
+            lines.append(f"# fitted {key}: {fitted[key]!r} ({where}; not applied by this file)")
+    lines += [f"{k}: {_yaml_value(v)}" for k, v in data.items()]
+    return "\n".join(lines) + "\n"
+
+
+def plot(path: str | os.PathLike, problem: Problem, fitted: dict[str, float]) -> None:
+    """Logged vs simulated (before and after the fit): the base path from above and every joint."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    before_b, before_q = problem.simulate({})
+    after_b, after_q = problem.simulate(fitted)
+    log = problem.log
+    joints = log.shape[1] - 7
+    t = np.arange(1, log.shape[0] + 1) / 240.0
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))
+    ax.plot(log[:, 0], log[:, 1], "k-", lw=2, label="log")
+    ax.plot(before_b[:, 0], before_b[:, 1], ":", label="robot file")
+    ax.plot(after_b[:, 0], after_b[:, 1], "--", label="fitted")
+    ax.set(xlabel="x (m)", ylabel="y (m)", title="base path", aspect="equal")
+    ax.legend()
+    for j in range(min(joints, 4)):
+        (line,) = bx.plot(t, log[:, 7 + j], "-", lw=2, label=f"q{j} log")
+        bx.plot(t, after_q[:, j], "--", color=line.get_color(), label=f"q{j} fitted")
+    bx.set(xlabel="t (s)", ylabel="joint angle (rad)", title=f"joints (first {min(joints, 4)} of {joints})")
+    bx.legend(fontsize="small", ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
