@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::env::{ActionMode, EnvConfig, ObservationPart};
 use crate::error::{invalid, invalid_at, Result};
+use crate::gait::{Gait, LateralUndulation};
 
 /// With [`SteerAssist::residual`], the agent's steering action's weight in the sum
 /// `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`: 2, so that whatever `baseline:steer` asks (at
@@ -250,6 +251,135 @@ impl AssistedEnv {
     }
 }
 
+/// A controller a run can imitate before training (`init: {imitate: NAME}`, snake-rl): it acts in
+/// the env's own action space, so that a policy can be fitted to its actions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Imitable {
+    /// [`JointsSine`] unsteered: pybullet snake.py's wave as joint targets.
+    Sine,
+    /// [`JointsSine`] steered back to the line through the goal along the wave's direction of
+    /// travel ([`JOINTS_STEER_GAIN`]).
+    SteeredSine,
+}
+
+impl Imitable {
+    /// The configuration name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Imitable::Sine => "sine",
+            Imitable::SteeredSine => "steered_sine",
+        }
+    }
+}
+
+/// [`Imitable::SteeredSine`]'s steering offset per metre of the base's x off the goal's x, radians
+/// (`steering = clip(gain * (x - goal_x), -JOINTS_MAX_STEERING, JOINTS_MAX_STEERING)`). The paper's
+/// env observes no heading, only the base position, and its snake travels towards -y with a start
+/// yaw within 0.2 rad: a controller of the observation alone steers on the lateral offset.
+pub const JOINTS_STEER_GAIN: f64 = 0.15;
+/// [`Imitable::SteeredSine`]'s largest steering offset, radians: the wave (0.4 rad) plus the
+/// offset stays inside [-1, 1] rad, the joints mode's targets at `action_scale` 1.
+pub const JOINTS_MAX_STEERING: f64 = 0.3;
+
+/// pybullet snake.py's wave ([`LateralUndulation`]) as the `joints` action mode's actions: each
+/// env's wave advances by `physics_steps_per_env_step` physics steps per env step and restarts with
+/// its episode; an action is the wave's target over `action_scale`, clipped to [-1, 1]. Steered
+/// ([`Imitable::SteeredSine`]), the wave's steering offset follows the base's lateral offset from
+/// the goal ([`JOINTS_STEER_GAIN`]).
+#[derive(Debug, Clone)]
+pub struct JointsSine {
+    kind: Imitable,
+    joints: usize,
+    observation_dim: usize,
+    /// Where the observation holds the base position (the steered controller's input).
+    base_at: usize,
+    goal_x: f64,
+    steer_gain: f64,
+    action_scale: f64,
+    waves: Vec<LateralUndulation>,
+    targets: Vec<f64>,
+}
+
+impl JointsSine {
+    /// The controller for `envs` envs of `config`, or an error saying why it cannot drive them.
+    pub fn new(kind: Imitable, config: &EnvConfig, envs: usize) -> Result<Self> {
+        if config.action.mode != ActionMode::Joints {
+            return Err(invalid(format!(
+                "{} sets joint targets: it needs action mode 'joints', got '{}'",
+                kind.name(),
+                config.action.mode.name()
+            )));
+        }
+        let base_at = config
+            .observation_structure()
+            .offset(ObservationPart::BasePosition);
+        let base_at = match (kind, base_at) {
+            (Imitable::Sine, at) => at.unwrap_or(0),
+            (Imitable::SteeredSine, Some(at)) if config.goal_distribution.is_none() => at,
+            _ => {
+                return Err(invalid(format!(
+                    "steered_sine steers on the base position towards the fixed goal: it needs an \
+                     observation with the base position ('paper') and no goal_distribution, got '{}'",
+                    config.observation.name()
+                )))
+            }
+        };
+        let mut wave = LateralUndulation::default();
+        wave.dt = config.snake.dt * f64::from(config.physics_steps_per_env_step);
+        Ok(JointsSine {
+            kind,
+            joints: config.joints(),
+            observation_dim: config.observation_dim(),
+            base_at,
+            goal_x: config.goal.0,
+            steer_gain: JOINTS_STEER_GAIN,
+            action_scale: config.action_scale,
+            waves: vec![wave; envs],
+            targets: vec![0.0; config.joints()],
+        })
+    }
+
+    /// The same with another steering gain (radians per metre; [`JOINTS_STEER_GAIN`]).
+    pub fn with_steer_gain(mut self, gain: f64) -> Self {
+        self.steer_gain = gain;
+        self
+    }
+
+    /// The number of envs it drives.
+    pub fn envs(&self) -> usize {
+        self.waves.len()
+    }
+
+    /// Restarts env `env`'s wave (its episode ended).
+    pub fn reset(&mut self, env: usize) {
+        self.waves[env].reset();
+    }
+
+    /// Writes every env's action for its observation (`obs`: `envs x observation_dim`) into
+    /// `actions` (`envs x joints`) and advances the waves by one env step.
+    pub fn act(&mut self, obs: &[f32], actions: &mut [f32]) {
+        let rows = obs.chunks_exact(self.observation_dim);
+        for ((wave, row), action) in self
+            .waves
+            .iter_mut()
+            .zip(rows)
+            .zip(actions.chunks_exact_mut(self.joints))
+        {
+            wave.steering = match self.kind {
+                Imitable::Sine => 0.0,
+                Imitable::SteeredSine => (self.steer_gain
+                    * (f64::from(row[self.base_at]) - self.goal_x))
+                    .clamp(-JOINTS_MAX_STEERING, JOINTS_MAX_STEERING),
+            };
+            wave.next_targets(&mut self.targets);
+            for (a, t) in action.iter_mut().zip(&self.targets) {
+                *a = (t / self.action_scale).clamp(-1.0, 1.0) as f32;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -383,5 +513,76 @@ mod tests {
             let expected = if handed { steer } else { [0.5; 3] };
             assert_eq!(out, expected, "near_goal {near_goal}, goal at {distance}");
         }
+    }
+
+    #[test]
+    fn joints_sine_is_the_wave_over_the_action_scale() {
+        let config = EnvConfig {
+            action_scale: 0.5,
+            ..EnvConfig::default()
+        };
+        let mut c = JointsSine::new(Imitable::Sine, &config, 2).unwrap();
+        let (n, d) = (config.joints(), config.observation_dim());
+        let (mut wave, mut restarted) =
+            (LateralUndulation::default(), LateralUndulation::default());
+        let obs = vec![0.0f32; 2 * d];
+        let mut actions = vec![0.0f32; 2 * n];
+        let (mut targets, mut restarted_targets) = (vec![0.0; n], vec![0.0; n]);
+        let expected = |t: &[f64]| -> Vec<f32> {
+            t.iter()
+                .map(|t| (t / 0.5).clamp(-1.0, 1.0) as f32)
+                .collect()
+        };
+        for step in 0..1000 {
+            if step == 600 {
+                c.reset(1);
+                restarted.reset();
+            }
+            c.act(&obs, &mut actions);
+            wave.next_targets(&mut targets);
+            restarted.next_targets(&mut restarted_targets);
+            assert_eq!(actions[..n], expected(&targets)[..], "step {step}");
+            if step >= 600 {
+                assert_eq!(
+                    actions[n..],
+                    expected(&restarted_targets)[..],
+                    "step {step}"
+                );
+            }
+        }
+        // Steered on the goal's line, it is the plain wave; off it, the steering is bounded.
+        let mut steered = JointsSine::new(Imitable::SteeredSine, &config, 1).unwrap();
+        let mut plain = JointsSine::new(Imitable::Sine, &config, 1).unwrap();
+        let (mut a, mut b) = (vec![0.0f32; n], vec![0.0f32; n]);
+        for _ in 0..500 {
+            steered.act(&obs[..d], &mut a);
+            plain.act(&obs[..d], &mut b);
+            assert_eq!(a, b);
+        }
+        let mut off = obs[..d].to_vec();
+        off[0] = 100.0;
+        steered.act(&off, &mut a);
+        let mut wave = LateralUndulation::default().with_steering(JOINTS_MAX_STEERING);
+        for _ in 0..501 {
+            wave.next_targets(&mut targets);
+        }
+        assert_eq!(a, expected(&targets));
+    }
+
+    #[test]
+    fn joints_sine_needs_the_joints_mode() {
+        let message = JointsSine::new(Imitable::Sine, &gait_env(ObservationLayout::Extended), 1)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("needs action mode 'joints', got 'gait'"),
+            "{message}"
+        );
+        let goal = EnvConfig {
+            goal_distribution: Some(Default::default()),
+            ..EnvConfig::default()
+        };
+        assert!(JointsSine::new(Imitable::SteeredSine, &goal, 1).is_err());
+        assert!(JointsSine::new(Imitable::Sine, &goal, 1).is_ok());
     }
 }

@@ -47,6 +47,8 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "goal-20",
         "goal-5",
         "goal-yaw-pitch-16",
+        "paper-init-10",
+        "paper-init-20",
         "paper-large-10",
         "paper-large-5",
         "paper-small-10",

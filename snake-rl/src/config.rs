@@ -20,6 +20,7 @@
 use serde::de::{self, Deserializer};
 use serde::{Deserialize, Serialize, Serializer};
 use serde_json::{Map, Value};
+use snake_core::controllers::{Imitable, JointsSine};
 use snake_core::env::Task;
 use snake_core::{EnvConfig, Preset, SteerAssist};
 
@@ -94,6 +95,13 @@ pub mod limits {
     /// Bounds of `log_std_init`: SB3's own bounds of a learnt log standard deviation (SAC's
     /// `LOG_STD_MIN`, `LOG_STD_MAX`), beyond which the noise is 0 or swamps the action.
     pub const LOG_STD_INIT: [f64; 2] = [-20.0, 2.0];
+    /// Most env steps of the controller an `init` imitates (`init.steps`): 2^22, a few minutes of
+    /// stepping on 2 cores.
+    pub const MAX_INIT_STEPS: u64 = 1 << 22;
+    /// Most memory the imitation data may take, bytes.
+    pub const MAX_INIT_BYTES: u64 = 2 << 30;
+    /// Most minibatch size of the imitation fit (`init.batch_size`).
+    pub const MAX_INIT_BATCH: u64 = 1 << 16;
     /// Most joint counts one `snake-cli bench` measures.
     pub const MAX_BENCH_SIZES: usize = 16;
     /// Most runs per joint count of `snake-cli bench`.
@@ -343,6 +351,10 @@ pub struct RunConfig {
     /// none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub steer_assist: Option<SteerAssist>,
+    /// Native trainer: before PPO, fit the policy to a controller by imitation ([`InitConfig`];
+    /// null: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub init: Option<InitConfig>,
     /// PPO's hyperparameters.
     pub ppo: PpoConfig,
     /// More env keywords, as `snakesim.SnakeEnv` takes them (goal, goal_radius, max_episode_steps,
@@ -371,9 +383,122 @@ impl Default for RunConfig {
             threads: None,
             energy_ramp: None,
             steer_assist: None,
+            init: None,
             ppo: PpoConfig::default(),
             env: Map::new(),
         }
+    }
+}
+
+/// Initialisation by imitation (the run's `init` table, native trainer): before PPO, the training
+/// envs are driven by a controller in their own action space for `steps` env steps; the actor's
+/// mean is fitted to its actions (behaviour cloning: mean squared error, Adam, `epochs` passes in
+/// minibatches of `batch_size`), the action noise set to `log_std`, and with `critic` the value
+/// network fitted to the controller's discounted returns. With `normalize`, the observation and
+/// return statistics are first updated from the imitation data, so that the fit sees what PPO will.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitConfig {
+    /// The controller: `sine` (pybullet snake.py's wave as joint targets) or `steered_sine` (the same
+    /// steered back to the goal's line); see [`Imitable`].
+    pub imitate: Imitable,
+    /// Env steps of the controller (summed over the envs, 65536).
+    #[serde(
+        default = "InitConfig::default_steps",
+        deserialize_with = "integer::deserialize"
+    )]
+    pub steps: u64,
+    /// Passes over the imitation data (10).
+    #[serde(
+        default = "InitConfig::default_epochs",
+        deserialize_with = "integer::deserialize"
+    )]
+    pub epochs: usize,
+    /// Minibatch size (256).
+    #[serde(
+        default = "InitConfig::default_batch_size",
+        deserialize_with = "integer::deserialize"
+    )]
+    pub batch_size: usize,
+    /// Adam's learning rate (1e-3).
+    #[serde(default = "InitConfig::default_learning_rate")]
+    pub learning_rate: f64,
+    /// The policy's log standard deviation after the fit (-1.6: about 0.2 of the action range).
+    #[serde(default = "InitConfig::default_log_std")]
+    pub log_std: f64,
+    /// Also fit the value network to the controller's discounted returns (false).
+    #[serde(default)]
+    pub critic: bool,
+}
+
+impl InitConfig {
+    fn default_steps() -> u64 {
+        65_536
+    }
+    fn default_epochs() -> usize {
+        10
+    }
+    fn default_batch_size() -> usize {
+        256
+    }
+    fn default_learning_rate() -> f64 {
+        1e-3
+    }
+    fn default_log_std() -> f64 {
+        -1.6
+    }
+
+    /// An `init` table imitating `imitate`, every other key its default.
+    pub fn new(imitate: Imitable) -> Self {
+        InitConfig {
+            imitate,
+            steps: Self::default_steps(),
+            epochs: Self::default_epochs(),
+            batch_size: Self::default_batch_size(),
+            learning_rate: Self::default_learning_rate(),
+            log_std: Self::default_log_std(),
+            critic: false,
+        }
+    }
+
+    /// Checks the table against the run's env; errors name the key path (`init.steps`).
+    pub fn validate(&self, env: &EnvConfig, n_envs: usize) -> Result<(), ConfigError> {
+        use limits::*;
+        check_range("init.steps", self.steps, 1, MAX_INIT_STEPS)?;
+        let row_bytes = 4 * (env.observation_dim() + env.action_dim() + 4) as u64;
+        if self.steps.saturating_mul(row_bytes) > MAX_INIT_BYTES {
+            return Err(key_err(
+                "init.steps",
+                format!(
+                    "{} steps of {} floats would take more than {} GiB",
+                    self.steps,
+                    row_bytes / 4,
+                    MAX_INIT_BYTES >> 30
+                ),
+            ));
+        }
+        check_range("init.epochs", self.epochs as u64, 1, MAX_EPOCHS)?;
+        check_range("init.batch_size", self.batch_size as u64, 1, MAX_INIT_BATCH)?;
+        if self.batch_size as u64 > self.steps {
+            return Err(key_err(
+                "init.batch_size",
+                format!(
+                    "must be at most init.steps = {}, got {}",
+                    self.steps, self.batch_size
+                ),
+            ));
+        }
+        check_real("init.learning_rate", self.learning_rate, true)?;
+        check_real("init.log_std", self.log_std, false)?;
+        check_range(
+            "init.log_std",
+            self.log_std,
+            LOG_STD_INIT[0],
+            LOG_STD_INIT[1],
+        )?;
+        JointsSine::new(self.imitate, env, n_envs)
+            .map(drop)
+            .map_err(|e| key_err("init.imitate", e.message()))
     }
 }
 
@@ -390,6 +515,7 @@ pub const IDENTITY_KEYS: &[&str] = &[
     "normalize",
     "energy_ramp",
     "steer_assist",
+    "init",
     "ppo",
     "env",
 ];
@@ -807,6 +933,14 @@ impl RunConfig {
                 ));
             }
             assist.bind(&env).map_err(|e| with_path("", e))?;
+        }
+        if let Some(init) = &self.init {
+            if self.trainer != TrainerKind::Native {
+                return Err(err(
+                    "init: only the native trainer initialises by imitation (trainer: native)",
+                ));
+            }
+            init.validate(&env, self.n_envs)?;
         }
         let row_bytes = 4 * (env.observation_dim() + env.action_dim() + 8) as u64;
         if rollout.saturating_mul(row_bytes) > MAX_ROLLOUT_BYTES {

@@ -9,7 +9,7 @@
 //!   tensor names, hand-written forward and backward passes, SB3's orthogonal initialisation.
 //! - [`ppo`]: the loss and its gradient, acting (sampling and deterministic), the update over a
 //!   rollout; [`buffer`]: the rollout buffer and GAE; [`optim`]: gradient clipping and Adam;
-//!   [`normalize`]: SB3's `VecNormalize`.
+//!   [`normalize`]: SB3's `VecNormalize`; [`imitate`]: initialisation by imitation of a controller.
 //! - [`trainer`]: the training loop and its run directory ([`rundir`]), models and checkpoints
 //!   ([`model`], safetensors), TensorBoard scalars ([`tensorboard`]), evaluation ([`evaluate`]).
 //!
@@ -62,6 +62,7 @@ pub mod buffer;
 pub mod config;
 pub mod evaluate;
 pub mod flags;
+pub mod imitate;
 pub mod lock;
 pub mod model;
 pub mod nn;

@@ -98,6 +98,9 @@ pub struct Checkpoint {
     pub wall_time: f64,
     /// Why it was written (`periodic`, `final`, `interrupt`, `non-finite`).
     pub reason: String,
+    /// Written during the run's `init` (initialisation by imitation), before its end: a run resumed
+    /// from it starts the initialisation over. Metadata `init: pending`, absent otherwise.
+    pub init_pending: bool,
 }
 
 fn f32_bytes(v: &[f32]) -> Vec<u8> {
@@ -268,6 +271,9 @@ pub fn save_checkpoint(path: &Path, c: &Checkpoint) -> std::io::Result<()> {
     meta.insert("n_updates".into(), c.n_updates.to_string());
     meta.insert("wall_time".into(), format!("{:?}", c.wall_time));
     meta.insert("reason".into(), c.reason.clone());
+    if c.init_pending {
+        meta.insert("init".into(), "pending".into());
+    }
     write_atomically(path, &serialize(&entries, meta))
 }
 
@@ -711,6 +717,7 @@ pub fn parse_checkpoint(path: &Path, bytes: &[u8]) -> Result<Checkpoint, ModelEr
         n_updates: p.parse("n_updates")?,
         wall_time: p.parse_in("wall_time", 0.0..=f64::MAX)?,
         reason: p.meta("reason")?.to_owned(),
+        init_pending: p.meta.get("init").is_some_and(|v| v == "pending"),
         policy,
     })
 }

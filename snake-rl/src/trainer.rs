@@ -9,6 +9,10 @@
 //! complete update; resuming starts the next rollout there. Everything runs on one thread pool of `threads` threads: the envs step in parallel, and each
 //! minibatch's gradient is split across the threads. A seed and a thread count give one run, bit for
 //! bit.
+//!
+//! A run with an `init` table first imitates its controller ([`crate::imitate`]): the fitted policy
+//! is evaluated at 0 timesteps, and PPO starts from it. A run stopped during the initialisation
+//! starts it over on resume; its checkpoints afterwards hold the fitted policy.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -17,11 +21,13 @@ use std::time::Instant;
 use rand::SeedableRng;
 use rand_chacha::ChaCha12Rng;
 use serde_json::{json, Map, Value};
+use snake_core::controllers::JointsSine;
 use snake_core::{AssistedEnv, EnvConfig, StepBuffers, VecSnakeEnv};
 
 use crate::buffer::RolloutBuffer;
 use crate::config::{RunConfig, TrainerKind};
 use crate::evaluate::{run_episodes, summarize, EvalError};
+use crate::imitate;
 use crate::lock::WriterLock;
 use crate::model::{self, Checkpoint, EnvSpec, SavedPolicy};
 use crate::nn::{init_params, ActorCritic, Workspace};
@@ -80,6 +86,8 @@ pub struct Summary {
     pub rollout_seconds: f64,
     /// Of which updating.
     pub update_seconds: f64,
+    /// Of which initialising by imitation (`init`; 0 without).
+    pub init_seconds: f64,
     /// The last evaluation.
     pub last_evaluation: Option<EvaluationRow>,
     /// Resident memory after the session's first update (worlds, buffers and networks allocated,
@@ -95,10 +103,10 @@ impl Summary {
         (self.timesteps - self.start_timesteps) as f64 / self.seconds.max(1e-9)
     }
 
-    /// The same without the evaluations' time.
+    /// The same without the evaluations' time and the initialisation's.
     pub fn training_timesteps_per_second(&self) -> f64 {
         (self.timesteps - self.start_timesteps) as f64
-            / (self.seconds - self.eval_seconds).max(1e-9)
+            / (self.seconds - self.eval_seconds - self.init_seconds).max(1e-9)
     }
 }
 
@@ -109,7 +117,7 @@ pub struct Progress {
     pub timesteps: u64,
     /// The run's total.
     pub total: u64,
-    /// Timesteps per second of this session, evaluations excluded.
+    /// Timesteps per second of this session, evaluations and the initialisation excluded.
     pub timesteps_per_second: f64,
     /// Mean return of the last 100 training episodes.
     pub ep_rew_mean: Option<f64>,
@@ -123,12 +131,36 @@ pub struct Progress {
     pub update_seconds: f64,
 }
 
+/// Progress of a run's `init` (initialisation by imitation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InitProgress {
+    /// Env steps of the controller so far (all envs).
+    pub steps: u64,
+    /// Of `init.steps` (rounded up to whole steps of every env).
+    pub total_steps: u64,
+    /// Epochs of the fit done.
+    pub epoch: usize,
+    /// Of `init.epochs`.
+    pub epochs: usize,
+    /// The last epoch's behaviour-cloning loss (mean squared error to the controller's actions).
+    pub bc_loss: Option<f64>,
+    /// The last epoch's critic loss, when the critic is fitted.
+    pub critic_loss: Option<f64>,
+}
+
+/// Offset of the seed of the `init` envs' reset from the run's seed, so that the controller's
+/// episodes are not PPO's first ones.
+pub const INIT_SEED_OFFSET: u64 = 1 << 40;
+
 /// Receives what happens during training; every method has a default that does nothing.
 pub trait Observer {
     /// Training starts at `start` of `total` timesteps.
     fn on_start(&mut self, _start: u64, _total: u64) {}
     /// After every env step (of all envs); a cheap place to move a progress bar.
     fn on_step(&mut self, _timesteps: u64) {}
+    /// During a run's `init` (initialisation by imitation): after every env step of the controller
+    /// and every epoch of the fit.
+    fn on_init(&mut self, _progress: &InitProgress) {}
     /// After every update.
     fn on_update(&mut self, _progress: &Progress) {}
     /// After every evaluation.
@@ -383,6 +415,10 @@ struct Run {
     rss_first_update: Option<f64>,
     /// The training envs' energy weight in the last rollout, when `energy_ramp` anneals it.
     ramped_energy_weight: Option<f64>,
+    /// The run's `init` is still to be done (a new run with one, or one stopped during it).
+    init_pending: bool,
+    /// Seconds of this session's `init` (its evaluation excluded).
+    init_seconds: f64,
 }
 
 impl Run {
@@ -408,6 +444,13 @@ impl Run {
                 dir.path().display()
             ))
         })?;
+        // A checkpoint written during the initialisation holds nothing to keep but its time: the
+        // run starts over, initialisation included.
+        let (checkpoint, restart_wall) = match checkpoint {
+            Some(c) if c.init_pending => (None, c.wall_time),
+            other => (other, 0.0),
+        };
+        let init_pending = config.init.is_some() && checkpoint.is_none();
         let (learner, normalizer, rng, timesteps, n_updates, wall_offset) = match checkpoint {
             Some(c) => {
                 if c.policy.net != net {
@@ -447,7 +490,7 @@ impl Run {
                     rng,
                     0,
                     0,
-                    0.0,
+                    restart_wall,
                 )
             }
         };
@@ -472,6 +515,8 @@ impl Run {
             last_evaluation: None,
             rss_first_update: None,
             ramped_energy_weight: None,
+            init_pending,
+            init_seconds: 0.0,
             config,
         })
     }
@@ -505,6 +550,7 @@ impl Run {
             n_updates: self.n_updates,
             wall_time: self.wall_time(),
             reason: reason.into(),
+            init_pending: self.init_pending,
         };
         model::save_checkpoint(&path, &c).map_err(|e| {
             TrainError::Io(format!("cannot write checkpoint {}: {e}", path.display()))
@@ -522,8 +568,12 @@ impl Run {
     }
 
     fn log(&mut self, values: &[(&str, f64)]) -> Result<(), TrainError> {
+        self.log_at(self.timesteps, values)
+    }
+
+    fn log_at(&mut self, step: u64, values: &[(&str, f64)]) -> Result<(), TrainError> {
         self.tb
-            .scalars(self.timesteps, values)
+            .scalars(step, values)
             .and_then(|()| self.tb.flush())
             .map_err(|e| TrainError::Io(format!("cannot write TensorBoard logs: {e}")))
     }
@@ -592,6 +642,7 @@ impl Run {
             eval_seconds: self.eval_seconds,
             rollout_seconds: self.rollout_seconds,
             update_seconds: self.update_seconds,
+            init_seconds: self.init_seconds,
             last_evaluation: self.last_evaluation,
             rss_mib: {
                 let end = rss_mib();
@@ -617,6 +668,9 @@ impl Run {
         observer: &mut dyn Observer,
     ) -> Result<Outcome, TrainError> {
         let c = self.config.clone();
+        if self.init_pending && !self.initialise(pool, observer)? {
+            return self.interrupted(self.timesteps);
+        }
         let mut rollout = self.start_rollouts(pool)?;
         // The next multiple of `freq` after `t` (never, for 0).
         let every = |freq: u64, t: u64| t.checked_div(freq).map_or(u64::MAX, |k| (k + 1) * freq);
@@ -664,6 +718,122 @@ impl Run {
         self.save_checkpoint("final")?;
         self.save_final()?;
         Ok(Outcome::Finished(self.summary()))
+    }
+
+    /// The run's `init`: drives the envs with the controller, fits the policy to it (the critic too
+    /// with `init.critic`), sets the action noise, then evaluates the fitted policy (the row at 0
+    /// timesteps). False when stopping was asked for (the initialisation is then done again on
+    /// resume). Its time is the run's.
+    fn initialise(
+        &mut self,
+        pool: &Arc<rayon::ThreadPool>,
+        observer: &mut dyn Observer,
+    ) -> Result<bool, TrainError> {
+        let init = self.config.init.clone().expect("a run with an init table");
+        let start = Instant::now();
+        let m = self.config.n_envs;
+        let mut controller = JointsSine::new(init.imitate, &self.env_config, m)
+            .map_err(|e| TrainError::Setup(format!("init.imitate: {}", e.message())))?;
+        let mut envs = VecSnakeEnv::new(self.env_config.clone(), m)?;
+        envs = if self.threads == 1 {
+            envs.with_threads(1)?
+        } else {
+            envs.with_pool(pool.clone())
+        };
+        let mut out = StepBuffers::for_envs(&envs);
+        let seed = self.config.seed.wrapping_add(INIT_SEED_OFFSET);
+        envs.reset(Some(seed), &mut out.obs)?;
+        let total_steps = init.steps.div_ceil(m as u64) * m as u64;
+        let mut progress = InitProgress {
+            steps: 0,
+            total_steps,
+            epoch: 0,
+            epochs: init.epochs,
+            bc_loss: None,
+            critic_loss: None,
+        };
+        let data = imitate::collect(
+            &mut controller,
+            &mut envs,
+            &mut out,
+            init.steps,
+            self.config.ppo.gamma,
+            self.normalizer.as_mut(),
+            &mut |done| {
+                progress.steps = done;
+                observer.on_init(&progress);
+                observer.should_stop()
+            },
+        )?;
+        drop(envs);
+        let Some(data) = data else {
+            return Ok(false);
+        };
+        progress.steps = total_steps;
+        let collect_seconds = start.elapsed().as_secs_f64();
+        let mut scalars = vec![("init/collect_seconds", collect_seconds)];
+        if let Some(r) = data.mean_return() {
+            scalars.push(("init/controller_ep_rew_mean", r));
+        }
+        if let Some(r) = data.success_rate() {
+            scalars.push(("init/controller_success_rate", r));
+        }
+        let net = self.learner.net().clone();
+        let mut params = self.learner.params.clone();
+        let initial_loss = imitate::bc_loss(&net, &params, &data);
+        scalars.push(("init/bc_loss", initial_loss));
+        self.log_at(0, &scalars)?;
+        let tb = &mut self.tb;
+        let mut log_error = None;
+        let losses = imitate::fit(&net, &mut params, &data, &init, &mut self.rng, &mut |e| {
+            let mut values = vec![("init/bc_loss", e.bc_loss)];
+            if let Some(c) = e.critic_loss {
+                values.push(("init/critic_loss", c));
+            }
+            if let Err(err) = tb
+                .scalars(e.epoch as u64, &values)
+                .and_then(|()| tb.flush())
+            {
+                log_error = Some(err);
+                return true;
+            }
+            progress.epoch = e.epoch;
+            progress.bc_loss = Some(e.bc_loss);
+            progress.critic_loss = e.critic_loss;
+            observer.on_init(&progress);
+            observer.should_stop()
+        });
+        if let Some(e) = log_error {
+            return Err(TrainError::Io(format!(
+                "cannot write TensorBoard logs: {e}"
+            )));
+        }
+        let Some(losses) = losses else {
+            return Ok(false);
+        };
+        let o = net.log_std_offset();
+        params[o..o + net.act_dim()].fill(init.log_std as f32);
+        self.learner.params.copy_from_slice(&params);
+        self.init_pending = false;
+        let seconds = start.elapsed().as_secs_f64();
+        self.init_seconds = seconds;
+        self.log_at(init.epochs as u64, &[("init/seconds", seconds)])?;
+        let last = losses.last().map_or(initial_loss, |l| l.bc_loss);
+        observer.on_note(&format!(
+            "init: imitated {} for {} env steps (its episodes: mean return {}, success {}), \
+             fitted in {} epochs (mse {initial_loss:.4} -> {last:.4}), {seconds:.1} s",
+            init.imitate.name(),
+            total_steps,
+            data.mean_return()
+                .map_or("n/a".into(), |r| format!("{r:.1}")),
+            data.success_rate()
+                .map_or("n/a".into(), |r| format!("{r:.2}")),
+            init.epochs,
+        ));
+        if self.config.eval_freq > 0 {
+            return self.evaluate(pool, observer);
+        }
+        Ok(true)
     }
 
     /// The envs (on the pool, or one after the other for one thread), reset with a seed that sets a
@@ -879,7 +1049,7 @@ impl Run {
         self.update_seconds += update_seconds;
         let rss = rss_mib();
         self.rss_first_update.get_or_insert(rss);
-        let busy = self.started.elapsed().as_secs_f64() - self.eval_seconds;
+        let busy = self.started.elapsed().as_secs_f64() - self.eval_seconds - self.init_seconds;
         let progress = Progress {
             timesteps: self.timesteps,
             total: self.config.timesteps,
