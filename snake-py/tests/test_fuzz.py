@@ -100,6 +100,17 @@ plausible = {
         st.floats(0.01, 20),
         max_size=2,
     ),
+    "randomize": st.one_of(
+        st.none(),
+        st.dictionaries(
+            st.sampled_from(
+                ["ground_friction", "mass_scale", "effort_scale", "kp_scale", "kd_scale", "obs_noise"]
+            ),
+            st.tuples(st.floats(-0.5, 3), st.floats(-0.5, 3)),
+            max_size=3,
+        ),
+        st.fixed_dictionaries({"latency_steps": st.tuples(st.integers(-1, 40), st.integers(-1, 40))}),
+    ),
 }
 
 

@@ -192,10 +192,11 @@ class Trainer:
         saved = runconfig.load(config_path)
         config = runconfig.resolve(runconfig.merge(saved, overrides))
         for key in runconfig.IDENTITY_KEYS:
-            if config[key] != saved[key]:
+            # Optional tables (steer_assist, init) are left out of a configuration while unset.
+            if config.get(key) != saved.get(key):
                 raise RunDirError(
                     f"cannot change {key} when resuming "
-                    f"({self.run_dir} has {saved[key]!r}, got {config[key]!r})"
+                    f"({self.run_dir} has {saved.get(key)!r}, got {config.get(key)!r})"
                 )
         found = rundir.checkpoints(self.run_dir)
         if not found:
