@@ -264,12 +264,29 @@ pub enum Imitable {
 }
 
 impl Imitable {
-    /// The configuration name.
+    /// Every one, in the order they are listed.
+    pub const ALL: [Imitable; 2] = [Imitable::Sine, Imitable::SteeredSine];
+
+    /// The configuration name (also `baseline:NAME`'s).
     pub fn name(self) -> &'static str {
         match self {
             Imitable::Sine => "sine",
             Imitable::SteeredSine => "steered_sine",
         }
+    }
+
+    /// The one called `name`; the error lists the names.
+    pub fn from_name(name: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|c| c.name() == name)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::ALL.iter().map(|c| c.name()).collect();
+                invalid(format!(
+                    "unknown controller '{name}' (expected one of: {})",
+                    names.join(", ")
+                ))
+            })
     }
 }
 
@@ -351,6 +368,16 @@ impl JointsSine {
         self.waves.len()
     }
 
+    /// The length of an observation it reads.
+    pub fn observation_dim(&self) -> usize {
+        self.observation_dim
+    }
+
+    /// The length of an action it writes (the env's joints).
+    pub fn action_dim(&self) -> usize {
+        self.joints
+    }
+
     /// Restarts env `env`'s wave (its episode ended).
     pub fn reset(&mut self, env: usize) {
         self.waves[env].reset();
@@ -407,6 +434,14 @@ mod tests {
             message.contains("'wiggle'") && message.contains("gait, steer"),
             "{message}"
         );
+        // An imitable controller's name is its configuration name (serde's) too.
+        for c in Imitable::ALL {
+            assert_eq!(Imitable::from_name(c.name()).unwrap(), c);
+            let json = serde_json::to_string(&c).unwrap();
+            assert_eq!(json, format!("\"{}\"", c.name()));
+        }
+        let message = Imitable::from_name("wiggle").unwrap_err().to_string();
+        assert!(message.contains("sine, steered_sine"), "{message}");
     }
 
     #[test]

@@ -5,6 +5,7 @@
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use snake_core::controllers::{Imitable, JointsSine as CoreSine};
 use snake_core::{AssistedEnv, ControlledEnv, HandController, SteerAssist as CoreAssist};
 
 use crate::{parse_config, to_py};
@@ -161,9 +162,77 @@ impl SteerAssist {
     }
 }
 
+/// The joint-target controllers' names (`init.imitate`, `baseline:NAME` of the paper's env).
+#[pyfunction]
+fn joint_controller_names() -> Vec<&'static str> {
+    Imitable::ALL.iter().map(|c| c.name()).collect()
+}
+
+/// JointsSine(name, config_json, envs): snake-core's `JointsSine` (`sine`, `steered_sine`), pybullet
+/// snake.py's wave as joint targets for `envs` envs of the env of `config_json`, a clock per env:
+/// `act(obs (envs, observation_dim) float32) -> actions (envs, joints) float32` advances every
+/// env's wave by one env step, `reset(env)` restarts one (its episode ended).
+#[pyclass(module = "snakesim._core")]
+struct JointsSine {
+    inner: CoreSine,
+}
+
+#[pymethods]
+impl JointsSine {
+    #[new]
+    fn new(name: &str, config_json: &str, envs: usize) -> PyResult<Self> {
+        let kind = Imitable::from_name(name).map_err(to_py)?;
+        let config = parse_config(config_json)?;
+        let max = snake_core::limits::MAX_ENVS;
+        if !(1..=max).contains(&envs) {
+            return Err(PyValueError::new_err(format!(
+                "envs must be in [1, {max}], got {envs}"
+            )));
+        }
+        let inner = CoreSine::new(kind, &config, envs).map_err(to_py)?;
+        Ok(JointsSine { inner })
+    }
+
+    #[getter]
+    fn envs(&self) -> usize {
+        self.inner.envs()
+    }
+
+    fn act<'py>(
+        &mut self,
+        py: Python<'py>,
+        obs: PyReadonlyArray2<'py, f32>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (flat, rows) = observations(&obs, self.inner.observation_dim())?;
+        if rows != self.inner.envs() {
+            return Err(PyValueError::new_err(format!(
+                "obs must have one row per env ({}), got {rows}",
+                self.inner.envs()
+            )));
+        }
+        let n = self.inner.action_dim();
+        let mut out = vec![0.0f32; rows * n];
+        self.inner.act(&flat, &mut out);
+        Ok(PyArray1::from_vec(py, out).reshape([rows, n])?.into_any())
+    }
+
+    fn reset(&mut self, env: usize) -> PyResult<()> {
+        if env >= self.inner.envs() {
+            return Err(PyValueError::new_err(format!(
+                "env must be in [0, {}), got {env}",
+                self.inner.envs()
+            )));
+        }
+        self.inner.reset(env);
+        Ok(())
+    }
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hand_actions, m)?)?;
     m.add_function(wrap_pyfunction!(hand_controller_names, m)?)?;
+    m.add_function(wrap_pyfunction!(joint_controller_names, m)?)?;
     m.add_class::<SteerAssist>()?;
+    m.add_class::<JointsSine>()?;
     Ok(())
 }

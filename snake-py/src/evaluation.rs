@@ -35,14 +35,17 @@ fn episode_dict<'py>(py: Python<'py>, e: &Episode) -> PyResult<Bound<'py, PyDict
 /// seconds, distance, path_length, work, weight, and the derived speed, path_efficiency and
 /// cost_of_transport, None where undefined). `act(obs)` gets the observations of the envs that run
 /// at once, float32 of shape (m, observation_dim), and returns their actions (m, action_dim), float32 or
-/// float64; env i is seeded with seed + i (snake-rl's `evaluate::run_episodes_with`).
+/// float64; env i is seeded with seed + i (snake-rl's `evaluate::run_episodes_with`). `restart(i)`,
+/// where given, is called when env i's episode ends (an actor with a clock per env restarts it).
 #[pyfunction]
+#[pyo3(signature = (config_json, episodes, seed, act, restart=None))]
 fn run_episodes<'py>(
     py: Python<'py>,
     config_json: &str,
     episodes: usize,
     seed: u64,
     act: Bound<'py, PyAny>,
+    restart: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     if !(1..=max_episodes()).contains(&episodes) {
         return Err(PyValueError::new_err(format!(
@@ -81,6 +84,18 @@ fn run_episodes<'py>(
             EvalError::Actor(message)
         })
     };
+    // Either error ends the evaluation at once: at most one of `failure` and `restart_failure` is set.
+    let mut restart_failure: Option<PyErr> = None;
+    let mut on_restart = |env: usize| -> Result<(), EvalError> {
+        let Some(restart) = &restart else {
+            return Ok(());
+        };
+        restart.call1((env,)).map(|_| ()).map_err(|e| {
+            let message = e.to_string();
+            restart_failure = Some(e);
+            EvalError::Actor(message)
+        })
+    };
     let mut interrupted: Option<PyErr> = None;
     let mut stop = || match py.check_signals() {
         Ok(()) => false,
@@ -89,7 +104,15 @@ fn run_episodes<'py>(
             true
         }
     };
-    let result = evaluate::run_episodes_with(&mut actor, &config, episodes, seed, None, &mut stop);
+    let result = evaluate::run_episodes_with(
+        &mut actor,
+        &mut on_restart,
+        &config,
+        episodes,
+        seed,
+        None,
+        &mut stop,
+    );
     match result {
         Ok(done) => {
             let list = PyList::empty(py);
@@ -99,9 +122,9 @@ fn run_episodes<'py>(
             Ok(list)
         }
         Err(EvalError::Env(e)) => Err(to_py(e)),
-        Err(EvalError::Actor(message)) => {
-            Err(failure.unwrap_or_else(|| PyValueError::new_err(message)))
-        }
+        Err(EvalError::Actor(message)) => Err(failure
+            .or(restart_failure)
+            .unwrap_or_else(|| PyValueError::new_err(message))),
         Err(EvalError::Interrupted) => {
             Err(interrupted
                 .unwrap_or_else(|| PyKeyboardInterrupt::new_err("evaluation interrupted")))

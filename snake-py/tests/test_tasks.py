@@ -156,7 +156,7 @@ def test_baseline_on_exactly_a_models_env(tmp_path, capsys):
     cli_main(["evaluate", "baseline:gait", "--env-from", str(model), "--episodes", "1", "--json", str(out)])
     assert json.loads(out.read_text())["joints"] == 10
 
-    assert set(TASK_IDS) == {"goal", *TASKS}
+    assert set(TASK_IDS) == {"paper", "goal", *TASKS}
     with pytest.raises(AgentError, match="--env-from"):
         load_agent("baseline:steer", env_from="baseline:gait")
     with pytest.raises(AgentError, match="for baselines"):

@@ -158,6 +158,10 @@ pub enum EvalError {
 /// actions the env takes as they are).
 pub type Actor<'a, A> = dyn FnMut(&[f32], usize, &mut [A]) -> Result<(), EvalError> + 'a;
 
+/// Told that env `i`'s episode ended (the env has already reset: its next observation starts a new
+/// episode), so that an actor with a state per env, a controller's clock, restarts it.
+pub type Restart<'a> = dyn FnMut(usize) -> Result<(), EvalError> + 'a;
+
 /// Runs `episodes` episodes of `policy` (deterministic or sampled) in `config`'s env, stepping the
 /// envs on `pool` (one after the other without one); `stop` is asked between steps. A sampling policy
 /// draws from a generator seeded with `seed`.
@@ -176,7 +180,15 @@ pub fn run_episodes(
         policy.env_actions(obs, m, deterministic, &mut rng, actions);
         Ok(())
     };
-    run_episodes_with(&mut act, config, episodes, seed, pool, stop)
+    run_episodes_with(
+        &mut act,
+        &mut |_| Ok(()),
+        config,
+        episodes,
+        seed,
+        pool,
+        stop,
+    )
 }
 
 /// The evaluation protocol for any actor: up to [`MAX_EVAL_ENVS`] envs, env `i` seeded with
@@ -184,8 +196,10 @@ pub fn run_episodes(
 /// says. `episodes` must be at least 1. The episodes come back in their own order (env 0's in
 /// turn, then env 1's, ...), not in the order they end, so that the i-th episode of two policies'
 /// runs is the same episode (`experiments/ground-or-controller/win_overlap.py` compares them so).
+/// `restart` hears of every episode's end, counted or not.
 pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     act: &mut Actor<'_, A>,
+    restart: &mut Restart<'_>,
     config: &EnvConfig,
     episodes: usize,
     seed: u64,
@@ -217,6 +231,7 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
         act(&out.obs, m, &mut actions)?;
         let finals = envs.step_into(&actions, &mut out)?;
         for f in finals.iter() {
+            restart(f.env)?;
             if counts[f.env] >= targets[f.env] {
                 continue;
             }

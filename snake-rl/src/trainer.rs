@@ -830,9 +830,13 @@ impl Run {
                 .map_or("n/a".into(), |r| format!("{r:.2}")),
             init.epochs,
         ));
-        if self.config.eval_freq > 0 {
-            return self.evaluate(pool, observer);
+        if self.config.eval_freq > 0 && !self.evaluate(pool, observer)? {
+            return Ok(false);
         }
+        // The fitted policy alone, before any PPO update, as the checkpoint at 0 timesteps: it is
+        // evaluated like any model (an experiment's "initialised policy alone"), and a run stopped
+        // in its first rollout resumes from it without redoing the init.
+        self.save_checkpoint("init")?;
         Ok(true)
     }
 

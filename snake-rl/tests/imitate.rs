@@ -189,6 +189,11 @@ fn resume_goes_through_the_init() {
         params(&whole) == params(&stopped),
         "a run resumed in its init differs"
     );
+    // The fitted policy alone is kept as the checkpoint at 0 timesteps.
+    let fitted =
+        model::load_checkpoint(&whole.join("checkpoints/model_0_steps.safetensors")).unwrap();
+    assert!(!fitted.init_pending);
+    assert_eq!(fitted.reason, "init");
     // Stopped after the init: its checkpoints hold the fitted policy, and resuming does not redo it.
     std::fs::remove_dir_all(&stopped).ok();
     struct StopAt(u64, u64);

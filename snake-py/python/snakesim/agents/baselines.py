@@ -1,5 +1,7 @@
-"""Hand-made controllers of the goal task (``snakesim/SnakeGoal-v0``, gait actions): the yardstick a
-trained agent must beat. ``snakesim evaluate baseline:steer --joints 10`` evaluates one like an agent.
+"""Hand-made controllers: the yardstick a trained agent must beat. ``snakesim evaluate baseline:steer
+--joints 10`` evaluates one like an agent.
+
+Of the goal task (``snakesim/SnakeGoal-v0``, gait actions):
 
 - ``gait``: the wave at the middle of its amplitude and frequency ranges (0.4 rad, 0.7 Hz), never
   steered: the paper's "sine wave" start, which goes wherever its drift takes it.
@@ -8,6 +10,13 @@ trained agent must beat. ``snakesim evaluate baseline:steer --joints 10`` evalua
   and 4 (x 0.5 rad) on 10 episodes per snake length, seeds 100-109. On the terrain observation
   the bearing is in its rolled head frame, mirrored while the body is upside down, so steer then
   turns the right way (docs/tasks.md, "The head frame on hills").
+
+Of the paper's env (``snakesim/Snake-v0``, joint targets; ``--env paper``), the controllers a run's
+``init`` imitates (snake-core's ``JointsSine``), with a clock per env that restarts with its episode:
+
+- ``sine``: pybullet snake.py's wave as joint targets, never steered.
+- ``steered_sine``: the same, its steering offset following the base's x off the goal's (0.15 rad
+  per metre, at most 0.3 rad): the paper's observation has the base position and no heading.
 """
 
 from __future__ import annotations
@@ -20,8 +29,12 @@ import numpy as np
 from snakesim import _core
 from snakesim.envs.config import observation_slice
 
-#: The controllers by name (snake-core's ``HandController::ALL``).
-NAMES = tuple(_core.hand_controller_names())
+#: The gait-action controllers by name (snake-core's ``HandController::ALL``).
+GAIT_NAMES = tuple(_core.hand_controller_names())
+#: The joint-target controllers by name (snake-core's ``Imitable::ALL``, ``init.imitate``'s names).
+JOINT_NAMES = tuple(_core.joint_controller_names())
+#: Every baseline by name.
+NAMES = GAIT_NAMES + JOINT_NAMES
 
 
 def goal_bearing(obs: np.ndarray, structure: Mapping[str, int]) -> np.ndarray:
@@ -36,9 +49,11 @@ def goal_bearing(obs: np.ndarray, structure: Mapping[str, int]) -> np.ndarray:
 
 class Controller:
     """``act(obs_batch) -> actions`` of the named baseline in the env of ``env_kwargs`` (SnakeEnv's
-    keywords): snake-core's ``HandController``, the one implementation, which also drives
-    ``steer_assist`` (:class:`snakesim.wrappers.SteerAssist`). Actions are float64, the values
-    the env is given."""
+    keywords). A gait-action one is snake-core's ``HandController``, the one implementation, which
+    also drives ``steer_assist`` (:class:`snakesim.wrappers.SteerAssist`); its actions are float64,
+    the values the env is given. A joint-target one (``sine``, ``steered_sine``) is snake-core's
+    ``JointsSine``, a wave per row of the batch: ``restart(i)`` when row i's episode ends
+    (:func:`snakesim.agents.evaluation.run_episodes` does), ``restart()`` before a new run."""
 
     def __init__(self, name: str, env_kwargs: Mapping[str, Any]) -> None:
         from snakesim.envs.config import env_config
@@ -46,13 +61,34 @@ class Controller:
         if name not in NAMES:
             raise ValueError(f"unknown baseline {name!r} (expected one of: {', '.join(NAMES)})")
         self.name, self._config = name, env_config(**env_kwargs)
-        # Checks the env once (gait actions, the goal vector), with the core's message.
-        dim = _core.Env(self._config).observation_dim
-        _core.hand_actions(name, self._config, np.zeros((0, dim), np.float32))
+        # Checks the env once (gait actions and the goal vector, or joint targets), with the core's
+        # message.
+        env = _core.Env(self._config)
+        self._action_dim = env.action_dim
+        self._waves: Any = None
+        if name in JOINT_NAMES:
+            _core.JointsSine(name, self._config, 1)
+        else:
+            _core.hand_actions(name, self._config, np.zeros((0, env.observation_dim), np.float32))
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
         obs = np.ascontiguousarray(np.atleast_2d(np.asarray(obs, dtype=np.float32)))
-        return _core.hand_actions(self.name, self._config, obs)
+        if self.name in GAIT_NAMES:
+            return _core.hand_actions(self.name, self._config, obs)
+        if len(obs) == 0:
+            return np.zeros((0, self._action_dim), np.float32)
+        if self._waves is None or self._waves.envs != len(obs):
+            self._waves = _core.JointsSine(self.name, self._config, len(obs))
+        return self._waves.act(obs)
+
+    def restart(self, env: int | None = None) -> None:
+        """Row ``env``'s episode ended (every row's, with None): its wave starts over."""
+        if self._waves is None:
+            return
+        if env is None:
+            self._waves = None
+        else:
+            self._waves.reset(env)
 
 
-__all__ = ["NAMES", "Controller", "goal_bearing"]
+__all__ = ["GAIT_NAMES", "JOINT_NAMES", "NAMES", "Controller", "goal_bearing"]

@@ -9,7 +9,9 @@ from typing import Any
 from snakesim.agents.loading import Agent
 
 
-def run_episodes(act: Any, env_kwargs: Mapping[str, Any], episodes: int, seed: int) -> list[dict[str, Any]]:
+def run_episodes(
+    act: Any, env_kwargs: Mapping[str, Any], episodes: int, seed: int, restart: Any = None
+) -> list[dict[str, Any]]:
     """Runs ``episodes`` episodes of ``act(obs_batch) -> actions`` in a batched env of its own, as
     snake-rl's ``evaluate::run_episodes_with`` (the native trainer's evaluations) does: up to 16
     episodes at once, env i seeded with ``seed + i`` (its later episodes continue its stream), so a
@@ -17,12 +19,15 @@ def run_episodes(act: Any, env_kwargs: Mapping[str, Any], episodes: int, seed: i
     1's, ...), not the order they end in, so two policies' i-th episodes are one episode. Each is a
     dict: ``ret``, ``steps``, ``success``, ``seconds``, ``distance`` (m, start to end), ``path_length``
     (m), ``work`` (J), ``weight`` (N), ``speed`` (m/s), ``path_efficiency`` and ``cost_of_transport``
-    (None where undefined).
+    (None where undefined). ``restart(i)``, where given, hears that env i's episode ended (an actor
+    with a clock per env restarts it).
     """
     from snakesim import _core
     from snakesim.envs.config import action_array, env_config
 
-    return _core.run_episodes(env_config(**env_kwargs), episodes, seed, lambda obs: action_array(act(obs)))
+    return _core.run_episodes(
+        env_config(**env_kwargs), episodes, seed, lambda obs: action_array(act(obs)), restart
+    )
 
 
 def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
@@ -36,7 +41,10 @@ def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
 
 def evaluate(agent: Agent, episodes: int, seed: int, deterministic: bool = True) -> dict[str, Any]:
     """:func:`summarize` of ``episodes`` episodes of the agent, with the per-episode figures."""
-    done = run_episodes(lambda obs: agent.act(obs, deterministic), agent.env_kwargs, episodes, seed)
+    agent.restart()
+    done = run_episodes(
+        lambda obs: agent.act(obs, deterministic), agent.env_kwargs, episodes, seed, agent.restart
+    )
     out = summarize(done)
     shown = ("steps", "success", "seconds", "speed", "path_efficiency", "cost_of_transport")
     out["per_episode"] = [{"return": e["ret"], **{key: e[key] for key in shown}} for e in done]

@@ -110,6 +110,13 @@ class Agent:
         obs = np.ascontiguousarray(np.atleast_2d(obs), dtype=np.float32)
         return self.steer_assist.apply(obs, np.atleast_2d(actions))
 
+    def restart(self, env: int | None = None) -> None:
+        """Row ``env`` of the batch starts a new episode (every row, with None): a baseline with a
+        clock (``baseline:sine``) restarts it; policies have no state between steps."""
+        restart = getattr(self.policy, "restart", None) if self.kind == "baseline" else None
+        if restart is not None:
+            restart(env)
+
     def own_actions(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
         """The policy's own actions (before any ``steer_assist``), in [-1, 1]."""
         if self.kind == "native":
@@ -121,7 +128,7 @@ class Agent:
         return actions
 
 
-#: ``baseline:NAME`` names a hand-made controller of the goal task (snakesim.agents.baselines).
+#: ``baseline:NAME`` names a hand-made controller (snakesim.agents.baselines).
 BASELINE_PREFIX = "baseline:"
 #: The entry of an SB3 zip's ``data`` where ``snakesim export`` records the env keywords (plain JSON).
 EXPORTED_ENV_KEY = "snakesim_env_kwargs"

@@ -71,7 +71,8 @@ def agent_options(p: argparse.ArgumentParser) -> None:
         "source",
         metavar="RUN_OR_MODEL",
         help="a run directory, a native model .safetensors, an SB3 model .zip (SB3 1.x or 2.x), or "
-        "baseline:steer / baseline:gait (hand-made controllers of the goal task)",
+        "baseline:steer / baseline:gait (hand-made controllers of the goal task), baseline:sine / "
+        "baseline:steered_sine (of the paper's env: --env paper)",
     )
     p.add_argument(
         "--joints", type=positive_int, help="for a bare .zip: the snake's joints (default: from the model)"
@@ -83,6 +84,7 @@ def agent_options(p: argparse.ArgumentParser) -> None:
 
 #: Gymnasium ids of the tasks a baseline runs in, by task name.
 TASK_IDS = {
+    "paper": "snakesim/Snake-v0",
     "goal": "snakesim/SnakeGoal-v0",
     "pegs": "snakesim/SnakePegs-v0",
     "rough": "snakesim/SnakeRough-v0",
@@ -105,7 +107,7 @@ def baseline_env_options(p: argparse.ArgumentParser) -> None:
         "--env",
         type=task_name,
         metavar="TASK",
-        help="for a baseline: the task, goal (default), pegs or rough, or its Gymnasium id "
+        help="for a baseline: the task, goal (default), paper, pegs or rough, or its Gymnasium id "
         "(snakesim/SnakePegs-v0)",
     )
     p.add_argument("--robot", metavar="FILE", help="for a baseline: a robot file instead of the cube snake")

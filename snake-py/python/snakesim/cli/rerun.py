@@ -184,6 +184,7 @@ def replay(args: argparse.Namespace, agent: Any, rrd: Path | None) -> Recorded:
     def log_into(recording, recorded: Recorded) -> None:
         env = RerunLogger(make_env(**agent.env_kwargs), recording)
         for k in range(args.episodes):
+            agent.restart()
             rec = replay_module.record(
                 lambda obs: agent.act(obs, args.deterministic),
                 agent.env_kwargs,
