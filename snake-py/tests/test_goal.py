@@ -185,6 +185,16 @@ def test_the_paper_10_agent_solves_the_papers_10_joint_task():
     assert report["success_rate"] == 1.0, report
 
 
+def test_the_paper_20_agent_solves_the_papers_task_at_20_joints():
+    # The paper's env at 20 joints, solved by the paper's own proposal: the steered sine imitated
+    # at initialisation (models/paper-20.md).
+    model = MODELS / "paper-20.safetensors"
+    env = env_kwargs_of(model)
+    assert "task" not in env and env["joints"] == 20 and env["preset"] == "snakebot-gym", env
+    report = _evaluate(str(model), "--episodes", "4", "--seed", "777000")
+    assert report["success_rate"] == 1.0, report
+
+
 def test_evaluation_lists_the_episodes_in_their_own_order():
     """run_episodes' i-th episode is the same episode whatever the policy: env e of m is seeded with
     seed + e and its later episodes continue its stream, as a Gymnasium env reset once with that seed
