@@ -49,17 +49,7 @@ impl HandController {
 
     /// The controller called `name`; the error lists the names.
     pub fn from_name(name: &str) -> Result<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|c| c.name() == name)
-            .ok_or_else(|| {
-                let names: Vec<_> = Self::ALL.iter().map(|c| c.name()).collect();
-                // `invalid` caps the message, so a hostile name cannot flood it.
-                invalid(format!(
-                    "unknown baseline '{name}' (expected one of: {})",
-                    names.join(", ")
-                ))
-            })
+        by_name(&Self::ALL, Self::name, name, "baseline")
     }
 
     /// Writes the actions for `rows` observations of `on`'s env (`obs`: `rows x observation_dim`)
@@ -75,6 +65,26 @@ impl HandController {
             }
         }
     }
+}
+
+/// The one of `all` whose `name_of` is `name`; the error (a `what`) lists the names.
+fn by_name<T: Copy>(
+    all: &[T],
+    name_of: fn(T) -> &'static str,
+    name: &str,
+    what: &str,
+) -> Result<T> {
+    all.iter()
+        .copied()
+        .find(|c| name_of(*c) == name)
+        .ok_or_else(|| {
+            let names: Vec<_> = all.iter().map(|c| name_of(*c)).collect();
+            // `invalid` caps the message, so a hostile name cannot flood it.
+            invalid(format!(
+                "unknown {what} '{name}' (expected one of: {})",
+                names.join(", ")
+            ))
+        })
 }
 
 /// `baseline:steer`'s steering action for the goal vector (gx, gy) in the head frame (its -y ahead,
@@ -277,16 +287,7 @@ impl Imitable {
 
     /// The one called `name`; the error lists the names.
     pub fn from_name(name: &str) -> Result<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|c| c.name() == name)
-            .ok_or_else(|| {
-                let names: Vec<_> = Self::ALL.iter().map(|c| c.name()).collect();
-                invalid(format!(
-                    "unknown controller '{name}' (expected one of: {})",
-                    names.join(", ")
-                ))
-            })
+        by_name(&Self::ALL, Self::name, name, "controller")
     }
 }
 
