@@ -74,7 +74,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
 
 
 # Each shipped agent's model file, by the config that trained it (the same name, or as listed here).
-AGENT_OF_CONFIG = {"paper-tuned-10": "paper-10"}
+AGENT_OF_CONFIG = {"paper-tuned-10": "paper-10", "paper-init-20": "paper-20"}
 
 
 @pytest.mark.parametrize(
