@@ -175,22 +175,15 @@ def test_a_model_is_shipped():
     assert snakesim.GOAL_ENV_ID == "snakesim/SnakeGoal-v0"
 
 
-def test_the_paper_10_agent_solves_the_papers_10_joint_task():
-    # The paper's own env (Snake-v0: fixed goal 10 m ahead, joint-target actions, snakebot-gym masses),
-    # which neither of the paper's published 10-joint agents ever solved (docs/experiments.md).
-    model = MODELS / "paper-10.safetensors"
+@pytest.mark.parametrize("joints", [10, 20])
+def test_the_paper_agents_solve_the_papers_task(joints):
+    # The paper's own env (Snake-v0: fixed goal 10 m ahead, joint-target actions, snakebot-gym masses):
+    # paper-10, which neither of the paper's published 10-joint agents ever solved
+    # (docs/experiments.md), and paper-20, the steered sine imitated at initialisation (the paper's
+    # own proposal, models/paper-20.md).
+    model = MODELS / f"paper-{joints}.safetensors"
     env = env_kwargs_of(model)
-    assert "task" not in env and env["joints"] == 10 and env["preset"] == "snakebot-gym", env
-    report = _evaluate(str(model), "--episodes", "4", "--seed", "777000")
-    assert report["success_rate"] == 1.0, report
-
-
-def test_the_paper_20_agent_solves_the_papers_task_at_20_joints():
-    # The paper's env at 20 joints, solved by the paper's own proposal: the steered sine imitated
-    # at initialisation (models/paper-20.md).
-    model = MODELS / "paper-20.safetensors"
-    env = env_kwargs_of(model)
-    assert "task" not in env and env["joints"] == 20 and env["preset"] == "snakebot-gym", env
+    assert "task" not in env and env["joints"] == joints and env["preset"] == "snakebot-gym", env
     report = _evaluate(str(model), "--episodes", "4", "--seed", "777000")
     assert report["success_rate"] == 1.0, report
 
