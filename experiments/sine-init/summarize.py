@@ -9,25 +9,18 @@ fitted policy's alone, and the controllers' on the same episodes.
 
 from __future__ import annotations
 
-import csv
 import json
 import statistics
 import sys
 from pathlib import Path
 
+from snakesim.sweeps.summary import evaluations
 
-def first_perfect(run: Path) -> tuple[int, float] | None:
+
+def first_perfect(rows: list[dict[str, float]]) -> tuple[int, float] | None:
     """(timesteps, wall seconds) of the first periodic evaluation at 10/10, if any."""
-    with open(run / "evaluations.csv", newline="") as f:
-        for row in csv.DictReader(f):
-            if float(row["success_rate"]) >= 1.0:
-                return int(row["timesteps"]), float(row["wall_time"])
-    return None
-
-
-def last_row(run: Path) -> dict[str, str]:
-    with open(run / "evaluations.csv", newline="") as f:
-        return list(csv.DictReader(f))[-1]
+    first = next((r for r in rows if r["success_rate"] >= 1.0), None)
+    return None if first is None else (int(first["timesteps"]), first["wall_time"])
 
 
 def success(path: Path) -> float | None:
@@ -69,8 +62,10 @@ def main(root: Path) -> None:
     )
     print("|---|---|---|---:|---|---|---|---|---|---|")
     for (label, joints), runs in sorted(groups.items(), key=lambda kv: (kv[0][1], kv[0][0])):
-        firsts = [f for f in map(first_perfect, runs) if f is not None]
-        last = [last_row(r) for r in runs]
+        # snakesim's own reader of evaluations.csv, in timestep order (as the sweeps' summaries).
+        history = [evaluations(r) for r in runs]
+        firsts = [f for f in map(first_perfect, history) if f is not None]
+        last = [rows[-1] for rows in history]
         finals = [success(evals / f"{r.name}.json") for r in runs]
         alone = [success(evals / f"{r.name}-alone.json") for r in runs] if label == "init" else []
         print(
