@@ -65,12 +65,14 @@ fn check(target: &str, bytes: &[u8]) {
         "robot_file" => checks::robot_file(bytes),
         "targets_csv" => checks::targets_csv(bytes),
         "world_file" => checks::world_file(bytes),
+        "fit_overrides" => checks::fit_overrides(bytes),
         _ => unreachable!("{target}"),
     }
 }
 
-const TARGETS: [&str; 7] = [
+const TARGETS: [&str; 8] = [
     "world_file",
+    "fit_overrides",
     "targets_csv",
     "model_file",
     "run_config",
@@ -118,6 +120,11 @@ fn the_seeds_parse() {
             panic!("a seed that is not a mapping");
         };
         snake_rl::config::env_from_keywords(&k).expect("a seed is valid");
+    }
+    for bytes in seeds("fit_overrides") {
+        let overrides: snake_core::run_targets::Overrides =
+            serde_json::from_slice(&bytes).expect("a seed parses");
+        overrides.validate().expect("a seed is valid");
     }
 }
 
@@ -201,6 +208,12 @@ proptest! {
     fn an_edited_world_file_is_a_world_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
         let all = seeds("world_file");
         checks::world_file(&apply(all[seed.index(all.len())].clone(), &e));
+    }
+
+    #[test]
+    fn edited_fit_overrides_are_a_trajectory_or_one_line(seed in any::<prop::sample::Index>(), e in edits()) {
+        let all = seeds("fit_overrides");
+        checks::fit_overrides(&apply(all[seed.index(all.len())].clone(), &e));
     }
 
     #[test]
@@ -341,4 +354,36 @@ fn a_bad_max_velocity_is_one_line_naming_the_file_and_key() {
         (None, None)
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `snakesim calibrate`'s candidates: any key at any value over many orders of magnitude (CMA-ES
+/// tries whatever the user's bounds allow) gives a finite trajectory or a one-line error, never a
+/// panic or a non-finite state passed on as a trajectory.
+const FIT_KEYS: [&str; 12] = [
+    "motors.kp",
+    "motors.kd",
+    "motors.max_velocity",
+    "ground_friction",
+    "lateral_friction",
+    "anisotropic_friction.x",
+    "anisotropic_friction.y",
+    "anisotropic_friction.z",
+    "skin_friction.forward",
+    "skin_friction.backward",
+    "skin_friction.transverse",
+    "mass_scale",
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    #[test]
+    fn any_fitted_value_is_a_trajectory_or_one_line(
+        keys in prop::sample::subsequence(FIT_KEYS.to_vec(), 1..4),
+        values in prop::collection::vec(prop_oneof![log_uniform(1e-9, 1e9), Just(0.0)], 4),
+    ) {
+        let fields: Vec<String> =
+            keys.iter().zip(&values).map(|(k, v)| format!("\"{k}\": {v:e}")).collect();
+        checks::fit_overrides(format!("{{{}}}", fields.join(", ")).as_bytes());
+    }
 }

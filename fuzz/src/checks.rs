@@ -7,6 +7,7 @@ use std::path::Path;
 
 use serde_json::Value;
 use snake_core::robot::{Robot, RobotSpec, Simulation};
+use snake_core::run_targets::{run_targets, Overrides};
 use snake_core::urdf::{InertiaSource, UrdfRobot};
 use snake_core::world_file::{parse_heightfield_csv, Ground};
 use snake_core::{StartPose, WorldSpec};
@@ -86,6 +87,46 @@ pub fn targets_csv(bytes: &[u8]) {
             .all(|r| r.len() == 3 && r.iter().all(|v| v.is_finite()))),
         Err(e) => one_line(&format!("{e:#}")),
     }
+}
+
+/// `snakesim calibrate`'s physics overrides (JSON of `--fit` keys: `_core.simulate_robot`'s
+/// `overrides_json`) on the shipped paper-cubes-5 robot driven by 8 rows of targets: a trajectory of
+/// 8 finite rows, or a one-line error (an unknown key, a value out of its range, one the engine
+/// refuses), never a panic or an abort.
+pub fn fit_overrides(bytes: &[u8]) {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return;
+    };
+    let overrides = match Overrides::from_json(text) {
+        Ok(o) => o,
+        Err(e) => return one_line(&e.to_string()),
+    };
+    if let Err(e) = overrides.validate() {
+        one_line(&e.to_string());
+    }
+    let urdf = include_bytes!("../../robots/paper-cubes-5.urdf");
+    with_file("paper-cubes-5.urdf", urdf, |path| {
+        let spec = RobotSpec::load(path).expect("the shipped robot loads");
+        let joints = spec.urdf.movable_joints().len();
+        let targets: Vec<f64> = (0..8 * joints)
+            .map(|i| 0.3 * ((i % 5) as f64 - 2.0))
+            .collect();
+        let start = StartPose {
+            z: 0.3,
+            ..StartPose::resting(0.25)
+        };
+        match run_targets(&spec, start, &WorldSpec::default(), &overrides, &targets) {
+            Ok(trajectory) => {
+                assert_eq!(
+                    (trajectory.base.len(), trajectory.joints.len()),
+                    (8, 8 * joints)
+                );
+                assert!(trajectory.base.iter().flatten().all(|v| v.is_finite()));
+                assert!(trajectory.joints.iter().all(|v| v.is_finite()));
+            }
+            Err(e) => one_line(&e.to_string()),
+        }
+    });
 }
 
 /// A robot that parsed and passed its checks is built in Bullet and stepped: a file that makes the

@@ -104,6 +104,13 @@ fn check(key: &str, v: Option<f64>, low: f64, high: f64, open_low: bool) -> Resu
 }
 
 impl Overrides {
+    /// Reads an object of fit keys (`_core.simulate_robot`'s `overrides_json`); the error is one line
+    /// (a key of any characters is quoted escaped), naming `overrides`. Values are not checked here:
+    /// [`Overrides::validate`].
+    pub fn from_json(text: &str) -> Result<Self> {
+        serde_json::from_str(text).map_err(|e| invalid_at("overrides", e.to_string()))
+    }
+
     /// Checks every value's range; the message names the key.
     pub fn validate(&self) -> Result<()> {
         let big = 1e6;

@@ -34,8 +34,7 @@ fn simulate_robot<'py>(
         .map(WorldRef::load)
         .transpose()
         .map_err(to_py)?;
-    let overrides: Overrides = serde_json::from_str(overrides_json)
-        .map_err(|e| PyValueError::new_err(format!("overrides: {e}")))?;
+    let overrides = Overrides::from_json(overrides_json).map_err(to_py)?;
     let joints = spec.urdf.movable_joints().len();
     let shape = targets.shape();
     if shape[1] != joints || shape[0] == 0 {

@@ -149,6 +149,8 @@ def _run(args, tmp_path, capsys):
         ("joints", "joint columns"),
         ("rows", "rows, the targets have"),
         ("nan", "not a finite number"),
+        ("text", "is not a number"),
+        ("cells", "cells, the header has"),
         ("unsorted", "expected 1 (rows sorted"),
     ],
 )
@@ -158,10 +160,12 @@ def test_bad_logs_are_one_line(logged, tmp_path, capsys, change, expected):
         lines = [",".join(line.split(",")[:-1]) for line in lines]
     elif change == "rows":
         lines = lines[:-1]
-    elif change == "nan":
+    elif change in ("nan", "text"):
         cells = lines[5].split(",")
-        cells[3] = "nan"
+        cells[3] = "nan" if change == "nan" else "1.0.0"
         lines[5] = ",".join(cells)
+    elif change == "cells":
+        lines[5] = lines[5].rsplit(",", 1)[0]
     else:
         lines[1], lines[2] = lines[2], lines[1]
     log = tmp_path / "bad.csv"
@@ -217,11 +221,60 @@ def test_targets_that_do_not_match_the_robot(logged, tmp_path, capsys):
 
 
 @pytest.mark.parametrize(
+    ("change", "expected"),
+    [
+        ("nan", "yaw2: 'inf' is not a finite number"),
+        ("unsorted", "expected 1 (rows sorted"),
+        ("step", "the first column must be 'step'"),
+        ("huge", "csv_bytes"),
+    ],
+)
+def test_bad_targets_are_one_line(logged, tmp_path, capsys, change, expected):
+    """Non-finite, unsorted, a table without its step column, over the size limit (missing a joint:
+    test_targets_that_do_not_match_the_robot)."""
+    targets = tmp_path / "bad.csv"
+    lines = (logged / "targets.csv").read_text().splitlines()
+    if change == "nan":
+        cells = lines[5].split(",")
+        cells[3] = "inf"
+        lines[5] = ",".join(cells)
+    elif change == "unsorted":
+        lines[1], lines[2] = lines[2], lines[1]
+    elif change == "step":
+        lines[0] = "t" + lines[0].removeprefix("step")
+    if change == "huge":
+        with open(targets, "wb") as f:
+            f.truncate(LIMITS["csv_bytes"] + 1)  # sparse: no disk used
+    else:
+        targets.write_text("\n".join(lines) + "\n")
+    args = [
+        "--robot",
+        str(ROBOT),
+        "--targets",
+        str(targets),
+        "--log",
+        str(logged / "log.csv"),
+        "--fit",
+        "motors.kp=0.1:1",
+    ]
+    err = _run(args, tmp_path, capsys)
+    assert expected in err and "bad.csv" in err, err
+
+
+@pytest.mark.parametrize(
     ("fit", "expected"),
     [
         ("motors.stiffness=0.1:1", "unknown key"),
         ("motors.kp=1:0.1", "not below"),
         ("motors.kp=nan:1", "finite"),
+        ("motors.kp=-1:1", "must be >= 0"),
+        ("motors.kp", "expected KEY=LOW:HIGH"),
+        ("motors.kp=a:1", "is not LOW:HIGH numbers"),
+        # Bounds the simulation refuses: found before the fit, not by a candidate in the middle of it.
+        ("motors.max_velocity=0:5", "motors.max_velocity: must be in (0, "),
+        ("mass_scale=0.5:1e9", "mass_scale: must be in (0, 100]"),
+        ("ground_friction=0.1:1e9", "ground_friction: must be in [0, 1000]"),
+        ("skin_friction.forward=0.1:1", "the robot file sets no skin_friction to fit"),
     ],
 )
 def test_bad_fit_keys_are_one_line(logged, tmp_path, capsys, fit, expected):
@@ -237,6 +290,23 @@ def test_bad_fit_keys_are_one_line(logged, tmp_path, capsys, fit, expected):
     ]
     err = _run(args, tmp_path, capsys)
     assert expected in err and fit.split("=")[0] in err, err
+
+
+def test_a_fit_key_given_twice_is_one_line(logged, tmp_path, capsys):
+    args = [
+        "--robot",
+        str(ROBOT),
+        "--targets",
+        str(logged / "targets.csv"),
+        "--log",
+        str(logged / "log.csv"),
+        "--fit",
+        "motors.kp=0.1:1",
+        "--fit",
+        "motors.kp=0.2:2",
+    ]
+    err = _run(args, tmp_path, capsys)
+    assert "--fit motors.kp: given twice" in err, err
 
 
 def test_every_fit_key_is_an_override():

@@ -1,7 +1,8 @@
 """Property tests (hypothesis) over the env's constructor, reset options and actions: whatever a user
 passes, the env returns finite observations and rewards or raises a ValueError, TypeError or (physics
-that blew up) RuntimeError; nothing else, never a crash or a hang. And over model files: an edited
-model loads as an agent that acts finitely, or is refused in one line naming the file."""
+that blew up) RuntimeError; nothing else, never a crash or a hang. Over model files: an edited
+model loads as an agent that acts finitely, or is refused in one line naming the file. And over
+`snakesim calibrate`'s inputs (its --fit items, targets and log CSVs): checked values or one line."""
 
 from __future__ import annotations
 
@@ -13,6 +14,14 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from snakesim import SnakeEnv, agents
 from snakesim.envs.config import ENV_KEYWORDS
+from snakesim.runs.calibrate import (
+    BASE_COLUMNS,
+    FIT_KEYS,
+    CalibrationError,
+    parse_fit,
+    read_log,
+    read_targets,
+)
 
 ROBOTS = Path(__file__).resolve().parents[2] / "robots"
 WORLDS = ROBOTS.parent / "worlds"
@@ -225,3 +234,85 @@ def test_a_model_file_is_an_agent_or_one_line(tmp_path_factory, edits, name):
     event("loaded")
     obs = np.zeros((1, agent.policy.obs_dim), np.float32)
     assert np.isfinite(agent.act(obs)).all()
+
+
+# -- snakesim calibrate's inputs: its --fit items, its targets and log CSVs ------------------------------
+@settings(max_examples=300, deadline=None)
+@given(
+    items=st.lists(
+        st.one_of(
+            st.text(max_size=30),
+            st.builds("{}={}:{}".format, st.sampled_from(FIT_KEYS), st.floats(0, 10), st.floats(0, 10)),
+            st.builds(
+                "{}={}:{}".format,
+                st.sampled_from([*FIT_KEYS, "motors.stiffness", "", " motors.kp"]),
+                st.one_of(st.floats(0, 10), st.floats(), st.text(max_size=5)),
+                st.one_of(st.floats(0, 10), st.floats(), st.text(max_size=5)),
+            ),
+        ),
+        max_size=4,
+    )
+)
+def test_fit_items_are_bounds_or_one_line(items):
+    """``--fit KEY=LOW:HIGH``: finite bounds 0 <= low < high of known keys, each once, or a one-line
+    CalibrationError that names the flag."""
+    try:
+        bounds = parse_fit(items)
+    except CalibrationError as error:
+        event("refused")
+        message = str(error)
+        assert "\n" not in message and "--fit" in message, message
+        return
+    event("bounds")
+    assert bounds and set(bounds) <= set(FIT_KEYS)
+    for low, high in bounds.values():
+        assert math.isfinite(low) and math.isfinite(high) and 0 <= low < high
+
+
+CALIBRATION_JOINTS = ["yaw0", "pitch1", "yaw2"]
+
+
+def _calibration_csvs() -> tuple[bytes, bytes]:
+    """A targets table and a log (``snake-cli run --output``'s columns) of three steps of three joints."""
+    targets = ["step," + ",".join(CALIBRATION_JOINTS)]
+    log = [",".join([*BASE_COLUMNS, "q0", "q1", "q2"])]
+    for k in range(1, 4):
+        targets.append(f"{k},0.{k},-0.{k},0")
+        log.append(f"{k},{k / 240!r},0.0{k},0,0.025,0,0,0,1,0.01,-0.0{k},1e-3")
+    return ("\n".join(targets) + "\n").encode(), ("\n".join(log) + "\n").encode()
+
+
+CALIBRATION_TARGETS, CALIBRATION_LOG = _calibration_csvs()
+# What an edit puts in: a CSV's own tokens mostly, any bytes now and then.
+CSV_BYTES = st.one_of(
+    st.sampled_from([b"", b"0", b"7", b",", b"\n", b"\r\n", b" ", b"-", b".", b"e9", b"nan", b"inf", b"q3"]),
+    st.binary(max_size=8),
+)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    edits=st.lists(st.tuples(st.integers(0, 1 << 10), st.integers(0, 8), CSV_BYTES), max_size=4),
+    which=st.sampled_from(["targets", "log"]),
+    steps=st.one_of(st.just(3), st.integers(1, 4)),
+)
+def test_calibration_csvs_are_tables_or_one_line(tmp_path_factory, edits, which, steps):
+    """The targets and log CSVs of ``snakesim calibrate``, edited: a finite table of the robot's joints
+    (targets: steps x joints, in the robot's order; log: steps x (7 + joints), as many rows as the
+    targets) or a one-line CalibrationError naming the file."""
+    path = tmp_path_factory.mktemp("calibration") / f"{which}.csv"
+    path.write_bytes(_edit(CALIBRATION_TARGETS if which == "targets" else CALIBRATION_LOG, edits))
+    try:
+        if which == "targets":
+            table = read_targets(path, CALIBRATION_JOINTS)
+            assert table.ndim == 2 and table.shape[1] == len(CALIBRATION_JOINTS)
+        else:
+            table = read_log(path, len(CALIBRATION_JOINTS), steps)
+            assert table.shape == (steps, 7 + len(CALIBRATION_JOINTS))
+    except CalibrationError as error:
+        event(f"{which} refused")
+        message = str(error)
+        assert "\n" not in message and str(path) in message, message
+        return
+    event(f"{which} read")
+    assert table.dtype == np.float64 and table.shape[0] >= 1 and np.isfinite(table).all()

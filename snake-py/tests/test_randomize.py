@@ -187,3 +187,111 @@ def test_the_vector_envs_report_each_episodes_physics():
         _, _, dones, step_infos = sb3.step_wait()
     assert dones.all() and all("physics" in info for info in step_infos)
     assert SnakeVectorEnv(2, task="goal", joints=5).reset(seed=1)[1] == {}
+
+
+# -- training under a distribution, end to end, with each trainer --------------------------------------
+DISTRIBUTION = {
+    "ground_friction": [0.3, 0.9],
+    "latency_steps": [0, 2],
+    "mass_scale": [0.8, 1.2],
+    "obs_noise": [0.0, 0.01],
+}
+# Rollouts of 4 envs x 128 steps, episodes of at most 200 steps (test_native.py's and test_cli.py's
+# tiny runs): about a second with either trainer.
+TINY_RUN = {
+    "joints": 3,
+    "n_envs": 4,
+    "timesteps": 1024,
+    "eval_freq": 512,
+    "eval_episodes": 2,
+    "checkpoint_freq": 512,
+    "ppo": {"n_steps": 128, "batch_size": 128, "n_epochs": 2},
+    "env": {"max_episode_steps": 200},
+}
+TRAINER = {
+    "native": {"trainer": "native", "threads": 2},
+    "sb3": {"trainer": "sb3", "device": "cpu", "torch_threads": 1},
+}
+
+
+def _train(base, config) -> tuple[int, object]:
+    import yaml
+    from snakesim.cli import app as cli
+
+    base.mkdir()
+    path = base / "config.yaml"
+    path.write_text(yaml.safe_dump(config))
+    run = base / "run"
+    return cli.main(["train", "--config", str(path), "--run-dir", str(run), "--no-progress"]), run
+
+
+def _weights(run, trainer: str) -> list[np.ndarray]:
+    if trainer == "native":
+        from safetensors.numpy import load_file
+
+        return [v for _, v in sorted(load_file(run / "model.safetensors").items())]
+    from snakesim.agents.loading import load_agent
+
+    return [p.detach().numpy().copy() for p in load_agent(run).policy.parameters()]
+
+
+@pytest.mark.parametrize("trainer", ["native", "sb3"])
+def test_training_under_a_distribution_end_to_end(trainer, tmp_path, capsys):
+    """A tiny run with ``env: {randomize: ...}`` with each trainer: it finishes and trains on the
+    distribution (its weights differ from the same run's on the plain env), the model (native: its file's
+    metadata; SB3: the run directory's config.yaml) records the distribution, and ``snakesim evaluate``
+    and the Python API evaluate it under its own distribution and under another (``--randomize FILE``,
+    ``env_overrides``)."""
+    import yaml
+    from snakesim.agents.evaluation import evaluate
+    from snakesim.agents.loading import load_agent
+    from snakesim.cli import app as cli
+    from snakesim.envs.env import make_env
+    from snakesim.runs import config as runconfig
+
+    if trainer == "sb3":
+        pytest.importorskip("stable_baselines3")
+    config = {**TINY_RUN, **TRAINER[trainer], "env": {**TINY_RUN["env"], "randomize": DISTRIBUTION}}
+    code, run = _train(tmp_path / "randomized", config)
+    assert code == 0, capsys.readouterr().err
+    code, plain = _train(tmp_path / "plain", {**TINY_RUN, **TRAINER[trainer]})
+    assert code == 0, capsys.readouterr().err
+    evaluations = (run / "evaluations.csv").read_text().splitlines()
+    assert len(evaluations) == 3, "a header and an evaluation at 512 and 1024 timesteps"
+    assert any(not np.array_equal(a, b) for a, b in zip(_weights(run, trainer), _weights(plain, trainer))), (
+        "the randomized run trained on other episodes than the plain env's"
+    )
+
+    # What records the distribution: the run's config.yaml, and a native model file's own metadata.
+    assert runconfig.load(run / "config.yaml")["env"]["randomize"] == DISTRIBUTION
+    if trainer == "native":
+        from safetensors import safe_open
+
+        for model in [run / "model.safetensors", *(run / "checkpoints").glob("*.safetensors")]:
+            with safe_open(model, "np") as f:
+                assert json.loads(f.metadata()["env"])["randomize"] == DISTRIBUTION, model
+            assert load_agent(model).env_kwargs["randomize"] == DISTRIBUTION, model
+    agent = load_agent(run)
+    assert agent.env_kwargs["randomize"] == DISTRIBUTION
+
+    # snakesim evaluate: under the model's own distribution, then under a file's.
+    other = {"mass_scale": [0.5, 0.5], "latency_steps": [3, 3]}
+    spec = tmp_path / "other.yaml"
+    spec.write_text(yaml.safe_dump(other))
+    reports = []
+    for extra in ([], ["--randomize", str(spec)]):
+        out = tmp_path / f"report{len(reports)}.json"
+        argv = ["evaluate", str(run), "--episodes", "2", "--json", str(out), *extra]
+        assert cli.main(argv) == 0, capsys.readouterr().err
+        reports.append(json.loads(out.read_text()))
+    assert reports[0]["randomize"] == DISTRIBUTION and reports[1]["randomize"] == other
+    assert [r["episodes"] for r in reports] == [2, 2]
+    assert reports[0]["mean_return"] != reports[1]["mean_return"], "other physics, other episodes"
+
+    # The Python API: the agent's env draws from the given distribution, and evaluates there.
+    agent = load_agent(run, env_overrides={"randomize": other})
+    _, info = make_env(**agent.env_kwargs).reset(seed=3)
+    assert info["physics"] == {"mass_scale": 0.5, "latency_steps": 3}
+    result = evaluate(agent, 2, seed=reports[1]["seed"])
+    assert len(result["per_episode"]) == 2
+    assert result["mean_return"] == reports[1]["mean_return"], "the API evaluates as the command does"

@@ -212,6 +212,24 @@ class Problem:
         return trajectory_error(base, joints, self.log)
 
 
+def check_bounds(problem: Problem, bounds: dict[str, tuple[float, float]]) -> None:
+    """CalibrationError naming the key unless both bounds of every key are values the simulation takes
+    (snake-core's ``Overrides::validate``: ``motors.max_velocity`` and ``mass_scale`` above 0, frictions
+    up to ``MAX_WORLD_FRICTION``, ...) on this robot (skin friction only where it has skin): one physics
+    step at each bound, before any fit, instead of a refused candidate in the middle of it."""
+    first = Problem(
+        problem.robot, problem.targets[:1], problem.log[:1], problem.world, problem.start, problem.fixed
+    )
+    for key, (low, high) in bounds.items():
+        for value in (low, high):
+            try:
+                first.simulate({key: value})
+            except ValueError as error:
+                raise CalibrationError(f"--fit {key}={low!r}:{high!r}: {error}") from None
+            except RuntimeError:
+                pass  # an unstable value is a candidate the fit scores as failed, not bad input
+
+
 class Space:
     """The fitted keys' bounds and their map to the optimizer's [0, 1] (log where low > 0)."""
 
@@ -224,9 +242,10 @@ class Space:
         for key, u in zip(self.keys, np.clip(x, 0.0, 1.0)):
             low, high = self.bounds[key]
             if low > 0:
-                out[key] = float(math.exp(math.log(low) + u * (math.log(high) - math.log(low))))
+                value = math.exp(math.log(low) + u * (math.log(high) - math.log(low)))
             else:
-                out[key] = float(low + u * (high - low))
+                value = low + u * (high - low)
+            out[key] = float(min(max(value, low), high))  # within the checked bounds despite rounding
         return out
 
 
@@ -260,6 +279,7 @@ def calibrate(
     if not 1 <= max_evals <= MAX_EVALS:
         raise CalibrationError(f"--max-evals must be in [1, {MAX_EVALS}], got {max_evals}")
     clock = time.monotonic()
+    check_bounds(problem, bounds)
     space = Space(bounds)
     dim = len(space.keys)
     optimizer = CMA(
