@@ -89,6 +89,8 @@ struct PpoCase {
     returns: Vec<f32>,
     old_values: Vec<f32>,
     settings: Settings,
+    /// `init.anchor`'s weight and the controller's action of each row, if the case keeps an anchor.
+    anchor: Option<(f32, Vec<f32>)>,
 }
 
 fn ppo_case(
@@ -150,7 +152,20 @@ fn ppo_case(
         old_values,
         settings,
         net,
+        anchor: None,
     }
+}
+
+/// [`ppo_case`] with an anchor of `weight` to a controller's actions (random, within the action
+/// space, as the controllers' are).
+fn anchored(mut case: PpoCase, weight: f32, seed: u64) -> PpoCase {
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
+    let targets = (0..case.rows * case.net.act_dim())
+        .map(|_| rng.gen_range(-1.0..1.0))
+        .collect();
+    case.name.push_str("-anchor");
+    case.anchor = Some((weight, targets));
+    case
 }
 
 fn ppo_spec(c: &PpoCase) -> Value {
@@ -171,6 +186,7 @@ fn ppo_spec(c: &PpoCase) -> Value {
         "tensors": tensors, "obs": c.obs, "actions": c.actions, "old_log_prob": c.old_log_prob,
         "advantages": c.advantages, "returns": c.returns, "old_values": c.old_values,
         "settings": c.settings,
+        "anchor": c.anchor.as_ref().map(|(w, t)| json!({"weight": w, "targets": t})),
     })
 }
 
@@ -208,7 +224,13 @@ fn check_ppo(c: &PpoCase, reference: &Value, threads: usize) {
     );
 
     let mut buffer = RolloutBuffer::new(rows, 1, c.net.obs_dim(), n);
+    if c.anchor.is_some() {
+        buffer = buffer.with_anchors();
+    }
     for r in 0..rows {
+        if let Some((_, targets)) = &c.anchor {
+            buffer.set_anchors(&targets[r * n..(r + 1) * n]);
+        }
         buffer.add(
             &c.obs[r * c.net.obs_dim()..(r + 1) * c.net.obs_dim()],
             &c.actions[r * n..(r + 1) * n],
@@ -230,6 +252,7 @@ fn check_ppo(c: &PpoCase, reference: &Value, threads: usize) {
             ent_coef: s.ent_coef as f32,
             vf_coef: s.vf_coef as f32,
             normalize_advantage: s.normalize_advantage,
+            anchor_weight: c.anchor.as_ref().map_or(0.0, |a| a.0),
         },
         max_grad_norm: s.max_grad_norm,
         target_kl: None,
@@ -261,6 +284,14 @@ fn check_ppo(c: &PpoCase, reference: &Value, threads: usize) {
         .sum::<f64>()
         / rows as f64;
     let r = &reference["stats"];
+    if c.anchor.is_some() {
+        let reference = r["anchor_loss"].as_f64().unwrap();
+        assert_close(
+            &format!("{tag} anchor_loss"),
+            &[stats.anchor_loss as f32],
+            &[reference],
+        );
+    }
     for (name, ours, cancels) in [
         ("policy_gradient_loss", stats.policy_gradient_loss, true),
         ("value_loss", stats.value_loss, false),
@@ -387,6 +418,29 @@ fn ppo_update_matches_sb3() {
                 ..default()
             },
             4,
+        ),
+        // `init.anchor`: the controller's term joins the loss (PPO-small's two-thread update and the
+        // row-split update of a shared trunk both carry it).
+        anchored(
+            ppo_case("small-10", Arch::Small, 22, 10, 64, default(), 7),
+            0.5,
+            8,
+        ),
+        anchored(
+            ppo_case(
+                "large-5",
+                Arch::Large,
+                12,
+                5,
+                37,
+                Settings {
+                    ent_coef: 0.01,
+                    ..default()
+                },
+                9,
+            ),
+            2.0,
+            10,
         ),
     ];
     let spec: Vec<Value> = cases.iter().map(ppo_spec).collect();

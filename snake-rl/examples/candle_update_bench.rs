@@ -249,6 +249,7 @@ impl HandWritten {
                 ent_coef: 0.0,
                 vf_coef: VF_COEF,
                 normalize_advantage: true,
+                anchor_weight: 0.0,
             },
             clip_coefficient: 1.0,
             net,
@@ -270,6 +271,7 @@ impl HandWritten {
             advantages: &self.advantages,
             returns: &data.returns,
             old_values: &data.returns,
+            anchors: &[],
             rows: ROWS,
         };
         let sums = loss::forward(

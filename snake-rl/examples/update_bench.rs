@@ -44,6 +44,7 @@ fn main() {
             advantages: &adv,
             returns: &ret,
             old_values: &ret,
+            anchors: &[],
             rows,
         };
         let settings = LossSettings {
@@ -52,6 +53,7 @@ fn main() {
             ent_coef: 0.0,
             vf_coef: 0.5,
             normalize_advantage: true,
+            anchor_weight: 0.0,
         };
         let mut ws = net.workspace(rows);
         let mut scratch = LossScratch::default();
@@ -124,6 +126,7 @@ fn full_update(arch: Arch, obs_dim: usize, act_dim: usize, threads: usize) -> f6
             ent_coef: 0.0,
             vf_coef: 0.5,
             normalize_advantage: true,
+            anchor_weight: 0.0,
         },
         max_grad_norm: 0.5,
         target_kl: None,

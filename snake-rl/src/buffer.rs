@@ -32,6 +32,9 @@ pub struct RolloutBuffer {
     pub advantages: Vec<f32>,
     /// Advantages plus values.
     pub returns: Vec<f32>,
+    /// The anchoring controller's actions in the same states (`rows x act_dim`), or empty when the
+    /// run keeps no anchor ([`RolloutBuffer::with_anchors`]).
+    pub anchors: Vec<f32>,
 }
 
 impl RolloutBuffer {
@@ -52,7 +55,22 @@ impl RolloutBuffer {
             log_probs: vec![0.0; rows],
             advantages: vec![0.0; rows],
             returns: vec![0.0; rows],
+            anchors: Vec::new(),
         }
+    }
+
+    /// The buffer also stores a controller's actions per row ([`RolloutBuffer::set_anchors`]).
+    pub fn with_anchors(mut self) -> Self {
+        self.anchors = vec![0.0; self.rows() * self.act_dim];
+        self
+    }
+
+    /// The anchoring controller's actions for the step [`RolloutBuffer::add`] stores next
+    /// (`n_envs` rows).
+    pub fn set_anchors(&mut self, actions: &[f32]) {
+        let width = self.n_envs * self.act_dim;
+        let s = self.len;
+        self.anchors[s * width..(s + 1) * width].copy_from_slice(actions);
     }
 
     /// Steps stored so far.
@@ -169,6 +187,10 @@ impl RolloutBuffer {
             out.advantages.push(self.advantages[i]);
             out.returns.push(self.returns[i]);
             out.old_values.push(self.values[i]);
+            if !self.anchors.is_empty() {
+                out.anchors
+                    .extend_from_slice(&self.anchors[i * self.act_dim..(i + 1) * self.act_dim]);
+            }
         }
         out.rows = indices.len();
     }
@@ -211,6 +233,8 @@ pub struct MinibatchData {
     pub returns: Vec<f32>,
     /// Rollout values.
     pub old_values: Vec<f32>,
+    /// The anchoring controller's actions (`rows x act_dim`), empty without an anchor.
+    pub anchors: Vec<f32>,
     /// Number of rows.
     pub rows: usize,
 }
@@ -223,6 +247,7 @@ impl MinibatchData {
         self.advantages.clear();
         self.returns.clear();
         self.old_values.clear();
+        self.anchors.clear();
         self.rows = 0;
     }
 }

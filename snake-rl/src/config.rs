@@ -102,6 +102,11 @@ pub mod limits {
     pub const MAX_INIT_BYTES: u64 = 2 << 30;
     /// Most minibatch size of the imitation fit (`init.batch_size`).
     pub const MAX_INIT_BATCH: u64 = 1 << 16;
+    /// Largest weight of the anchor to the imitated controller (`init.anchor`). The surrogate's
+    /// gradient in the action means grows as 1 / std (about 20 at the init's std of 0.05) while the
+    /// anchor's is its weight times the distance to the controller (hundredths): weights that
+    /// balance them are in the thousands, and a million leaves PPO nothing to say.
+    pub const MAX_ANCHOR_WEIGHT: f64 = 1e6;
     /// Most joint counts one `snake-cli bench` measures.
     pub const MAX_BENCH_SIZES: usize = 16;
     /// Most runs per joint count of `snake-cli bench`.
@@ -396,6 +401,7 @@ impl Default for RunConfig {
 /// minibatches of `batch_size`), the action noise set to `log_std`, and with `critic` the value
 /// network fitted to the controller's discounted returns. With `normalize`, the observation and
 /// return statistics are first updated from the imitation data, so that the fit sees what PPO will.
+/// With `anchor`, PPO keeps the controller's actions as a term of its loss (see [`InitConfig::anchor`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitConfig {
@@ -429,6 +435,12 @@ pub struct InitConfig {
     /// Also fit the value network to the controller's discounted returns (false).
     #[serde(default)]
     pub critic: bool,
+    /// Keeps the fitted policy near the controller during PPO (absent: no anchor). The controller
+    /// runs beside every rollout on the states the policy visits (DAgger's labels), and
+    /// `anchor * mean((mean_action - controller_action)^2)` joins PPO's loss (DAPG's behaviour-cloning
+    /// term): a number, or `lin_<w>` to let go of the controller linearly over the run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anchor: Option<Schedule>,
 }
 
 impl InitConfig {
@@ -458,6 +470,7 @@ impl InitConfig {
             learning_rate: Self::default_learning_rate(),
             log_std: Self::default_log_std(),
             critic: false,
+            anchor: None,
         }
     }
 
@@ -496,6 +509,10 @@ impl InitConfig {
             LOG_STD_INIT[0],
             LOG_STD_INIT[1],
         )?;
+        if let Some(anchor) = self.anchor {
+            check_real("init.anchor", anchor.initial(), false)?;
+            check_range("init.anchor", anchor.initial(), 0.0, MAX_ANCHOR_WEIGHT)?;
+        }
         JointsSine::new(self.imitate, env, n_envs)
             .map(drop)
             .map_err(|e| key_err("init.imitate", e.message()))

@@ -867,9 +867,19 @@ impl Run {
             norm.reset_returns(m);
             norm.normalize_obs(&mut obs);
         }
+        let mut buffer = RolloutBuffer::new(c.ppo.n_steps, m, d, n);
+        let anchor = match &c.init {
+            Some(init) if init.anchor.is_some() => {
+                buffer = buffer.with_anchors();
+                let controller = JointsSine::new(init.imitate, &self.env_config, m)
+                    .map_err(|e| TrainError::Setup(format!("init.imitate: {}", e.message())))?;
+                Some((controller, vec![0.0; m * n]))
+            }
+            _ => None,
+        };
         Ok(Rollout {
             envs,
-            buffer: RolloutBuffer::new(c.ppo.n_steps, m, d, n),
+            buffer,
             ws: net.workspace(m),
             net,
             scratch: LossScratch::default(),
@@ -884,6 +894,7 @@ impl Run {
             rewards: vec![0.0; m],
             dones: vec![false; m],
             terminal: vec![0.0; d],
+            anchor,
         })
     }
 
@@ -921,6 +932,11 @@ impl Run {
                 &mut r.log_probs,
             );
             act::clip_to_action_space(&r.actions, &mut r.clipped);
+            if let Some((controller, targets)) = &mut r.anchor {
+                // What the controller would do in these states (the envs' raw observations).
+                controller.act(&r.out.obs, targets);
+                r.buffer.set_anchors(targets);
+            }
             let finals = match &self.assist {
                 None => r.envs.step_into(&r.clipped, &mut r.out)?,
                 Some(assist) => {
@@ -937,6 +953,9 @@ impl Run {
             // The finished episodes: statistics, and the final observations of truncated ones.
             let mut bootstrap: Vec<(usize, Vec<f32>)> = Vec::new();
             for f in finals.iter() {
+                if let Some((controller, _)) = &mut r.anchor {
+                    controller.reset(f.env);
+                }
                 if self.episodes.len() == 100 {
                     self.episodes.pop_front();
                 }
@@ -997,6 +1016,11 @@ impl Run {
                 ent_coef: ppo.ent_coef as f32,
                 vf_coef: ppo.vf_coef as f32,
                 normalize_advantage: ppo.normalize_advantage,
+                anchor_weight: c
+                    .init
+                    .as_ref()
+                    .and_then(|i| i.anchor)
+                    .map_or(0.0, |a| a.at(progress_remaining) as f32),
             },
             max_grad_norm: ppo.max_grad_norm,
             target_kl: ppo.target_kl,
@@ -1083,6 +1107,18 @@ impl Run {
         if let Some(w) = self.ramped_energy_weight {
             scalars.push(("train/energy_weight", w));
         }
+        if self
+            .config
+            .init
+            .as_ref()
+            .is_some_and(|i| i.anchor.is_some())
+        {
+            scalars.push((
+                "train/anchor_weight",
+                f64::from(settings.loss.anchor_weight),
+            ));
+            scalars.push(("train/anchor_loss", stats.anchor_loss));
+        }
         if let Some(r) = progress.ep_rew_mean {
             scalars.push(("rollout/ep_rew_mean", r));
             scalars.push((
@@ -1124,6 +1160,9 @@ struct Rollout {
     dones: Vec<bool>,
     /// A truncated episode's final observation.
     terminal: Vec<f32>,
+    /// With `init.anchor`: the imitated controller, run beside the policy on the same envs (restarted
+    /// with each of their episodes), and its actions of the current step.
+    anchor: Option<(JointsSine, Vec<f32>)>,
 }
 
 fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {

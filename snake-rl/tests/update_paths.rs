@@ -40,6 +40,7 @@ fn settings(target_kl: Option<f64>) -> UpdateSettings {
             ent_coef: 0.01,
             vf_coef: 0.5,
             normalize_advantage: true,
+            anchor_weight: 0.0,
         },
         max_grad_norm: 0.5,
         target_kl,

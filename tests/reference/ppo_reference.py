@@ -8,7 +8,11 @@ SPEC.json holds a list of cases; each is one of:
   ``PPO.train()`` runs one epoch over a rollout buffer holding exactly that minibatch (batch_size = its
   rows), so the loss terms come from SB3's logger, the clipped gradients from the parameters' ``.grad``
   and the parameters after one Adam step from the policy. Before training, ``evaluate_actions`` gives
-  the log-probabilities, entropies and values, and the distribution the action means.
+  the log-probabilities, entropies and values, and the distribution the action means. With an
+  "anchor" (a weight w and a controller's action per row), the loss gains ``w * mse_loss(mean,
+  targets)`` (snakesim's `init.anchor`): torch's autograd gives that term's gradient on a fresh copy
+  of the policy, added to SB3's, and ``torch.optim.Adam(eps=1e-5)`` takes the step with the sum
+  (such cases set max_grad_norm beyond reach: the gradients are compared unclipped).
 - "adam": parameters and a sequence of gradients through ``torch.optim.Adam(eps=1e-5)``.
 - "gae": a recorded rollout through SB3's ``RolloutBuffer.compute_returns_and_advantage``.
 - "normalize": a sequence of observation and reward batches through SB3's ``VecNormalize``.
@@ -125,24 +129,45 @@ def run_ppo(case):
     logged = dict(logger.name_to_value)
 
     named = dict(model.policy.named_parameters())
+    grads = {name: named[name].grad.clone() for name in case["tensors"]}
+    params_after = {name: named[name].detach().clone() for name in case["tensors"]}
+    stats = {
+        key: float(logged[f"train/{key}"])
+        for key in (
+            "policy_gradient_loss",
+            "value_loss",
+            "entropy_loss",
+            "approx_kl",
+            "clip_fraction",
+            "loss",
+        )
+    }
+    if case.get("anchor"):
+        anchor = case["anchor"]
+        fresh = make_ppo(case).policy
+        targets = torch.tensor(f32(anchor["targets"], (rows, act_dim)))
+        mse = torch.nn.functional.mse_loss(fresh.get_distribution(obs).distribution.mean, targets)
+        (anchor["weight"] * mse).backward()
+        fresh_named = dict(fresh.named_parameters())
+        for name in grads:
+            if fresh_named[name].grad is not None:
+                grads[name] = grads[name] + fresh_named[name].grad
+        stats["anchor_loss"] = float(mse)
+        stats["loss"] += anchor["weight"] * float(mse)
+        adam = torch.optim.Adam(fresh.parameters(), lr=case["settings"]["learning_rate"], eps=1e-5)
+        adam.zero_grad()
+        for name, p in fresh_named.items():
+            p.grad = grads[name].clone() if name in grads else torch.zeros_like(p)
+        adam.step()
+        params_after = {name: fresh_named[name].detach().clone() for name in case["tensors"]}
     return {
         "mean": floats(mean),
         "log_prob": floats(log_prob),
         "entropy": floats(entropy),
         "values": floats(values.flatten()),
-        "stats": {
-            key: float(logged[f"train/{key}"])
-            for key in (
-                "policy_gradient_loss",
-                "value_loss",
-                "entropy_loss",
-                "approx_kl",
-                "clip_fraction",
-                "loss",
-            )
-        },
-        "grads": {name: floats(named[name].grad) for name in case["tensors"]},
-        "params_after": {name: floats(named[name]) for name in case["tensors"]},
+        "stats": stats,
+        "grads": {name: floats(g) for name, g in grads.items()},
+        "params_after": {name: floats(p) for name, p in params_after.items()},
     }
 
 

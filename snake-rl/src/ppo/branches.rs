@@ -79,6 +79,8 @@ pub(crate) struct SideStep {
     pub kl: f64,
     /// Rows with a clipped ratio.
     pub clipped: usize,
+    /// Policy: sum of squared distances to the anchoring controller's actions.
+    pub anchor_error: f64,
     /// Rows of the minibatch.
     pub rows: usize,
     /// Policy: the distribution's entropy before the step.
@@ -244,6 +246,7 @@ fn side_loop(
                     record.sum = sums.surrogate;
                     record.kl = sums.kl;
                     record.clipped = sums.clipped;
+                    record.anchor_error = sums.anchor_error;
                     if let Some(target) = settings.target_kl {
                         if sums.kl / rows as f64 > 1.5 * target {
                             flags |= KL_STOP;
@@ -322,14 +325,16 @@ fn minibatch(mb: &MinibatchData) -> Minibatch<'_> {
         advantages: &mb.advantages,
         returns: &mb.returns,
         old_values: &mb.old_values,
+        anchors: &mb.anchors,
         rows: mb.rows,
     }
 }
 
-/// The loss terms of one minibatch from both sides' records.
+/// The loss terms of one minibatch of `act_dim` actions from both sides' records.
 pub(crate) fn step_stats(
     policy: &SideStep,
     value: &SideStep,
+    act_dim: usize,
     settings: &LossSettings,
 ) -> LossStats {
     LossSums {
@@ -337,6 +342,7 @@ pub(crate) fn step_stats(
         value_error: value.sum,
         kl: policy.kl,
         clipped: policy.clipped,
+        anchor_error: policy.anchor_error,
     }
-    .stats(policy.rows, policy.entropy, settings)
+    .stats(policy.rows, act_dim, policy.entropy, settings)
 }

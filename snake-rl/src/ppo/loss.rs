@@ -10,6 +10,11 @@
 //! loss   = policy + ent_coef * entropy_loss + vf_coef * value
 //! ```
 //!
+//! A run that initialises by imitation may keep an anchor to its controller (`init.anchor`, weight
+//! `w`): `loss += w * mean((mean_action - controller_action)^2)` over the minibatch's rows and action
+//! dimensions, the controller acting on the states the policy visited (DAgger's labels; DAPG's
+//! behaviour-cloning term). With `w = 0` nothing of it is computed: SB3's loss, bit for bit.
+//!
 //! The gradient is written out by hand (no autograd): through the Gaussian's log-probability to the
 //! action means and `log_std`, and through the value head; [`ActorCritic::backward`] takes it from
 //! there. Every operation is float32, in the order PyTorch evaluates it; ties and bounds follow
@@ -33,6 +38,8 @@ pub struct LossSettings {
     pub vf_coef: f32,
     /// Normalise advantages per minibatch (SB3's `normalize_advantage`).
     pub normalize_advantage: bool,
+    /// Weight of the anchor to the controller's actions (0: no anchor, SB3's loss).
+    pub anchor_weight: f32,
 }
 
 /// Rows of one minibatch (or of one thread's chunk of it), row-major.
@@ -51,6 +58,9 @@ pub struct Minibatch<'a> {
     pub returns: &'a [f32],
     /// Values under the rollout's policy.
     pub old_values: &'a [f32],
+    /// `rows x act_dim` actions of the anchoring controller in the same states, or empty without an
+    /// anchor.
+    pub anchors: &'a [f32],
     /// Number of rows.
     pub rows: usize,
 }
@@ -65,6 +75,11 @@ impl<'a> Minibatch<'a> {
             advantages: &self.advantages[start..end],
             returns: &self.returns[start..end],
             old_values: &self.old_values[start..end],
+            anchors: if self.anchors.is_empty() {
+                self.anchors
+            } else {
+                &self.anchors[start * act_dim..end * act_dim]
+            },
             rows: end - start,
         }
     }
@@ -79,7 +94,10 @@ pub struct LossStats {
     pub value_loss: f32,
     /// Minus the mean entropy.
     pub entropy_loss: f32,
-    /// `policy + ent_coef * entropy_loss + vf_coef * value`.
+    /// Mean squared distance of the action means to the anchoring controller's actions (0 without an
+    /// anchor).
+    pub anchor_loss: f32,
+    /// `policy + ent_coef * entropy_loss + vf_coef * value (+ anchor_weight * anchor_loss)`.
     pub loss: f32,
     /// `mean((ratio - 1) - log ratio)`, the KL estimate SB3's `target_kl` tests.
     pub approx_kl: f32,
@@ -98,6 +116,8 @@ pub struct LossSums {
     pub kl: f64,
     /// Rows with a clipped ratio.
     pub clipped: usize,
+    /// Sum of squared distances to the anchoring controller's actions (every action dimension).
+    pub anchor_error: f64,
 }
 
 impl LossSums {
@@ -107,20 +127,35 @@ impl LossSums {
         self.value_error += other.value_error;
         self.kl += other.kl;
         self.clipped += other.clipped;
+        self.anchor_error += other.anchor_error;
     }
 
-    /// The minibatch's loss terms from the sums over all its `rows`, and the distribution's entropy
-    /// (the same for every row: the standard deviation does not depend on the state).
-    pub fn stats(&self, rows: usize, entropy: f32, settings: &LossSettings) -> LossStats {
+    /// The minibatch's loss terms from the sums over all its `rows` of `act_dim` actions, and the
+    /// distribution's entropy (the same for every row: the standard deviation does not depend on the
+    /// state).
+    pub fn stats(
+        &self,
+        rows: usize,
+        act_dim: usize,
+        entropy: f32,
+        settings: &LossSettings,
+    ) -> LossStats {
         let n = rows as f64;
         let policy_loss = -(self.surrogate / n) as f32;
         let value_loss = (self.value_error / n) as f32;
         let entropy_loss = -entropy;
+        let anchor_loss = (self.anchor_error / (n * act_dim as f64)) as f32;
+        let mut loss =
+            policy_loss + settings.ent_coef * entropy_loss + settings.vf_coef * value_loss;
+        if settings.anchor_weight > 0.0 {
+            loss += settings.anchor_weight * anchor_loss;
+        }
         LossStats {
             policy_loss,
             value_loss,
             entropy_loss,
-            loss: policy_loss + settings.ent_coef * entropy_loss + settings.vf_coef * value_loss,
+            anchor_loss,
+            loss,
             approx_kl: (self.kl / n) as f32,
             clip_fraction: (self.clipped as f64 / n) as f32,
         }
@@ -286,6 +321,15 @@ pub fn policy_terms(
             let var = scratch.var[j];
             d_mean[r * n + j] = g * (diff / var);
             scratch.d_log_std[j] += g * (diff * diff / var - 1.0);
+        }
+    }
+    if settings.anchor_weight > 0.0 && !chunk.anchors.is_empty() {
+        // d/d(mean) of w * sum((mean - target)^2) / (b * n).
+        let scale = 2.0 * settings.anchor_weight / (b * n as f32);
+        for (k, (d, &target)) in d_mean[..rows * n].iter_mut().zip(chunk.anchors).enumerate() {
+            let diff = mean[k] - target;
+            sums.anchor_error += f64::from(diff * diff);
+            *d += scale * diff;
         }
     }
     sums

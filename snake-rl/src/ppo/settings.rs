@@ -34,6 +34,8 @@ pub struct UpdateStats {
     pub approx_kl: f64,
     /// Mean fraction of clipped ratios.
     pub clip_fraction: f64,
+    /// Mean squared distance to the anchoring controller's actions (0 without an anchor).
+    pub anchor_loss: f64,
     /// The last minibatch's total loss.
     pub loss: f64,
     /// Explained variance of the rollout's values.

@@ -106,6 +106,7 @@ impl Learner {
             advantages: &mb.advantages,
             returns: &mb.returns,
             old_values: &mb.old_values,
+            anchors: &mb.anchors,
             rows,
         };
         let (net, params) = (&self.net, &self.params);
@@ -155,7 +156,7 @@ impl Learner {
         loss::add_entropy_gradient(&self.net, &settings.loss, &mut self.grads);
         let o = self.net.log_std_offset();
         let entropy = loss::gaussian_entropy(&self.params[o..o + self.net.act_dim()]);
-        sums.stats(rows, entropy, &settings.loss)
+        sums.stats(rows, self.net.act_dim(), entropy, &settings.loss)
     }
 
     /// One full update over `buffer` (returns and advantages computed), drawing minibatches with
@@ -193,6 +194,7 @@ impl Learner {
         stats.policy_gradient_loss = of(|s| s.policy_loss);
         stats.value_loss = of(|s| s.value_loss);
         stats.clip_fraction = of(|s| s.clip_fraction);
+        stats.anchor_loss = of(|s| s.anchor_loss);
         stats.epochs = all.last().map_or(0, |(e, _)| *e);
         let last_epoch: Vec<f64> = all
             .iter()
@@ -277,16 +279,19 @@ impl Learner {
         if let Some(e) = policy.non_finite.or(value.non_finite) {
             return Err(e);
         }
+        let act_dim = self.net.act_dim();
         let records = policy
             .steps
             .iter()
             .zip(&value.steps)
-            .map(|(p, v)| (p.epoch, branches::step_stats(p, v, &settings.loss)))
+            .map(|(p, v)| (p.epoch, branches::step_stats(p, v, act_dim, &settings.loss)))
             .collect();
-        let stopped = policy
-            .stopped
-            .zip(value.stopped)
-            .map(|(p, v)| (p.epoch, branches::step_stats(&p, &v, &settings.loss)));
+        let stopped = policy.stopped.zip(value.stopped).map(|(p, v)| {
+            (
+                p.epoch,
+                branches::step_stats(&p, &v, act_dim, &settings.loss),
+            )
+        });
         Ok((records, stopped))
     }
 }
