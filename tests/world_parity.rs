@@ -43,6 +43,10 @@ struct WorldScenario {
     friction: Vec<(i32, [f64; 3])>,
     kp: f64,
     kd: f64,
+    /// Each movable joint's `maxVelocity` (the robot file's servo limits), `None` where it has none;
+    /// absent: no joint has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_velocity: Option<Vec<Option<f64>>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     targets: Option<PathBuf>,
 }
@@ -323,6 +327,7 @@ fn cube_snake_on_every_kind_of_world() {
             friction: Vec::new(),
             kp: 0.1,
             kd: 1.0,
+            max_velocity: None,
             targets: None,
         };
         runs.push((scenario, spec));
@@ -384,6 +389,7 @@ fn urdf_robot_on_every_kind_of_world() {
             friction: friction.clone(),
             kp: robot.motors.kp,
             kd: robot.motors.kd,
+            max_velocity: Some((0..m).map(|k| robot.max_velocity(k)).collect()),
             targets: Some(target_path.clone()),
         };
         runs.push((scenario, spec));

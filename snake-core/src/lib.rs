@@ -45,6 +45,7 @@ pub mod files;
 pub mod gait;
 pub mod limits;
 pub mod math;
+pub mod recorded;
 pub mod robot;
 pub mod run_targets;
 pub mod skin;
@@ -71,6 +72,7 @@ pub use gait::{
     SerpenoidParams,
 };
 pub use math::{quaternion_from_euler, StartPose};
+pub use recorded::RecordedFiles;
 pub use robot::{
     Robot, RobotFile, RobotGait, RobotRef, RobotSpec, RobotWave, Simulation, WaveFile,
     DEFAULT_WAVE_STEERING,

@@ -34,6 +34,7 @@ use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, GaitKind, JointRoles, LateralUndulation, Serpenoid};
 use crate::limits::{short, MAX_MOTOR_VELOCITY, MAX_URDF_BYTES};
 use crate::math::StartPose;
+use crate::recorded::{FileOrRecord, Reader, RecordedFiles};
 use crate::skin::{SkinAxis, SkinFriction};
 use crate::urdf::{Geometry, InertiaSource, UrdfRobot};
 use crate::world::{BaseState, BodyId, Dynamics, Pose, World};
@@ -278,9 +279,25 @@ impl RobotSpec {
     /// Reads a robot: a `.urdf` file alone (pybullet's defaults for everything else) or a `.yaml` /
     /// `.yml` robot file.
     pub fn load(path: &Path) -> Result<Self> {
+        Self::read(&Reader::disk(path))
+    }
+
+    /// The robot of a record of its files ([`RecordedFiles`]), read as if they lay at its path.
+    pub fn from_record(record: &RecordedFiles) -> Result<Self> {
+        let reader = Reader::record(record);
+        let spec = Self::read(&reader)?;
+        reader.finish()?;
+        Ok(spec)
+    }
+
+    fn read(reader: &Reader) -> Result<Self> {
+        let path = reader.path();
         match path.extension().and_then(|e| e.to_str()) {
-            Some("urdf") => Self::from_urdf(UrdfRobot::load(path)?, path),
-            Some("yaml") | Some("yml") => Self::from_robot_file(path),
+            Some("urdf") => {
+                let text = reader.main(MAX_URDF_BYTES, "URDF")?;
+                Self::from_urdf(UrdfRobot::parse_file(&text, path)?, path)
+            }
+            Some("yaml") | Some("yml") => Self::from_robot_file(reader),
             _ => Err(invalid(format!(
                 "{}: a robot is a .urdf file or a .yaml robot file",
                 path.display()
@@ -305,17 +322,18 @@ impl RobotSpec {
         })
     }
 
-    fn from_robot_file(path: &Path) -> Result<Self> {
+    fn from_robot_file(reader: &Reader) -> Result<Self> {
+        let path = reader.path();
         let shown = path.display().to_string();
-        let text = crate::files::read_text(path, MAX_URDF_BYTES, "robot file")?;
+        let text = reader.main(MAX_URDF_BYTES, "robot file")?;
         crate::files::check_yaml_shape(&text, &shown)?;
         let file: RobotFile = serde_norway::from_str(&text)
             .map_err(|e| crate::files::yaml_error(&shown, "a robot file", &e))?;
-        let urdf_path = path
-            .parent()
-            .unwrap_or_else(|| Path::new(""))
-            .join(&file.urdf);
-        let urdf = UrdfRobot::load(&urdf_path)?;
+        let urdf_path = reader.dir().join(&file.urdf);
+        let urdf = UrdfRobot::parse_file(
+            &reader.named(&file.urdf, MAX_URDF_BYTES, "URDF")?,
+            &urdf_path,
+        )?;
         let m = file.motors;
         if !(m.kp.is_finite() && m.kp >= 0.0 && m.kd.is_finite() && m.kd >= 0.0) {
             return Err(invalid(format!(
@@ -789,22 +807,41 @@ impl Robot {
     }
 }
 
-/// A robot named by its file, as an [`EnvConfig`](crate::EnvConfig) holds it: serialised as the path,
-/// loaded (and checked) when deserialised or made with [`RobotRef::load`].
+/// A robot named by its file, as an [`EnvConfig`](crate::EnvConfig) holds it, with the texts it was
+/// read from ([`RobotRef::files`]). Made from a path ([`RobotRef::load`]) it serialises as the path;
+/// made from a record of its files ([`RobotRef::from_record`]), as that record, so that it never
+/// becomes what the path holds now. Deserialised from either form, loaded and checked.
 #[derive(Debug, Clone)]
 pub struct RobotRef {
     path: PathBuf,
     spec: Arc<RobotSpec>,
+    files: Arc<RecordedFiles>,
+    recorded: bool,
 }
 
 impl RobotRef {
     /// Reads a robot (`.urdf` or robot file) and checks that it can be built.
     pub fn load(path: &Path) -> Result<Self> {
-        let spec = RobotSpec::load(path)?;
+        let reader = Reader::disk(path);
+        let spec = RobotSpec::read(&reader)?;
+        Self::checked(spec, reader.finish()?, false)
+    }
+
+    /// The robot of a record of its files (what a model records of the robot it was trained on),
+    /// checked as [`RobotRef::load`] checks a file; a record that holds files the robot does not use
+    /// is refused.
+    pub fn from_record(record: &RecordedFiles) -> Result<Self> {
+        let spec = RobotSpec::from_record(record)?;
+        Self::checked(spec, record.clone(), true)
+    }
+
+    fn checked(spec: RobotSpec, files: RecordedFiles, recorded: bool) -> Result<Self> {
         spec.urdf.check_inertia(spec.inertia)?;
         Ok(RobotRef {
-            path: path.to_path_buf(),
+            path: files.path.clone(),
             spec: Arc::new(spec),
+            files: Arc::new(files),
+            recorded,
         })
     }
 
@@ -817,6 +854,16 @@ impl RobotRef {
     pub fn spec(&self) -> &RobotSpec {
         &self.spec
     }
+
+    /// The texts it was read from: the robot file and its URDF, or the URDF alone.
+    pub fn files(&self) -> &RecordedFiles {
+        &self.files
+    }
+
+    /// True when it was made from a record rather than read from its path.
+    pub fn is_recorded(&self) -> bool {
+        self.recorded
+    }
 }
 
 impl PartialEq for RobotRef {
@@ -827,13 +874,20 @@ impl PartialEq for RobotRef {
 
 impl Serialize for RobotRef {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        self.path.serialize(s)
+        if self.recorded {
+            self.files.serialize(s)
+        } else {
+            self.path.serialize(s)
+        }
     }
 }
 
 impl<'de> Deserialize<'de> for RobotRef {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let path = PathBuf::deserialize(d)?;
-        RobotRef::load(&path).map_err(serde::de::Error::custom)
+        match FileOrRecord::deserialize(d)? {
+            FileOrRecord::Path(path) => RobotRef::load(&path),
+            FileOrRecord::Record(record) => RobotRef::from_record(&record),
+        }
+        .map_err(serde::de::Error::custom)
     }
 }

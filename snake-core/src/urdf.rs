@@ -208,9 +208,13 @@ impl std::fmt::Display for InertiaSource {
 impl UrdfRobot {
     /// Reads and parses a URDF file; mesh files are looked up relative to it.
     pub fn load(path: &Path) -> Result<Self> {
-        let shown = path.display();
         let text = crate::files::read_text(path, MAX_URDF_BYTES, "URDF")?;
-        let mut robot = Self::parse_in(&text, &shown.to_string(), path.parent())?;
+        Self::parse_file(&text, path)
+    }
+
+    /// Parses the text of the URDF file at `path` (read already, or recorded): as [`UrdfRobot::load`].
+    pub(crate) fn parse_file(text: &str, path: &Path) -> Result<Self> {
+        let mut robot = Self::parse_in(text, &path.display().to_string(), path.parent())?;
         robot.source = Some(path.to_path_buf());
         Ok(robot)
     }

@@ -50,6 +50,7 @@ use crate::limits::{
     MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION, MAX_YAW,
 };
 use crate::math::quaternion_from_euler;
+use crate::recorded::{FileOrRecord, Reader, RecordedFiles};
 use crate::world::{BodyId, Dynamics, StaticShape, World};
 
 /// The ground of a world file: a map of exactly one of `plane`, `heightfield`, `rough`, `slope`.
@@ -696,17 +697,31 @@ fn check_scale(what: &str, scale: [f64; 3]) -> Result<()> {
 impl WorldSpec {
     /// Reads and checks a world file; `shown` in every error.
     pub fn load(path: &Path) -> Result<Self> {
-        let shown = path.display().to_string();
-        let text = crate::files::read_text(path, MAX_HEIGHTFIELD_BYTES, "world file")?;
-        Self::parse(
-            &text,
-            &shown,
-            path.parent().unwrap_or_else(|| Path::new("")),
-        )
+        Self::read(&Reader::disk(path))
+    }
+
+    /// The world of a record of its files ([`RecordedFiles`]), read as if they lay at its path.
+    pub fn from_record(record: &RecordedFiles) -> Result<Self> {
+        let reader = Reader::record(record);
+        let spec = Self::read(&reader)?;
+        reader.finish()?;
+        Ok(spec)
+    }
+
+    fn read(reader: &Reader) -> Result<Self> {
+        let shown = reader.path().display().to_string();
+        let text = reader.main(MAX_HEIGHTFIELD_BYTES, "world file")?;
+        Self::parse_from(&text, &shown, reader)
     }
 
     /// Parses a world file's text; heightfield files are read relative to `dir`.
     pub fn parse(text: &str, shown: &str, dir: &Path) -> Result<Self> {
+        // A main file in `dir`, for the names it gives; never read.
+        let main = dir.join("world.yaml");
+        Self::parse_from(text, shown, &Reader::disk(&main))
+    }
+
+    fn parse_from(text: &str, shown: &str, reader: &Reader) -> Result<Self> {
         let file: WorldFile = if text.trim().is_empty() {
             WorldFile::default()
         } else {
@@ -714,13 +729,18 @@ impl WorldSpec {
             serde_norway::from_str(text)
                 .map_err(|e| crate::files::yaml_error(shown, "a world file", &e))?
         };
-        file.resolve(shown, dir)
+        file.resolve_from(shown, reader)
     }
 }
 
 impl WorldFile {
     /// Checks every value and reads or generates the ground; `shown` prefixes every error.
     pub fn resolve(&self, shown: &str, dir: &Path) -> Result<WorldSpec> {
+        let main = dir.join("world.yaml");
+        self.resolve_from(shown, &Reader::disk(&main))
+    }
+
+    fn resolve_from(&self, shown: &str, reader: &Reader) -> Result<WorldSpec> {
         let e = |err: crate::Error| invalid(format!("{shown}: {}", err.message()));
         let ground = match &self.ground {
             GroundFile::Plane {} => Ground::Plane,
@@ -736,9 +756,10 @@ impl WorldFile {
             }
             GroundFile::Heightfield { file, scale } => {
                 check_scale("ground: heightfield: scale", *scale).map_err(e)?;
-                let path = dir.join(file);
+                let path = reader.dir().join(file);
                 let csv_shown = path.display().to_string();
-                let text = crate::files::read_text(&path, MAX_HEIGHTFIELD_BYTES, "heightfield")
+                let text = reader
+                    .named(file.as_ref(), MAX_HEIGHTFIELD_BYTES, "heightfield")
                     .map_err(|err| {
                         invalid(format!(
                             "{shown}: ground: heightfield: file: {}",
@@ -1003,21 +1024,48 @@ impl WorldSpec {
     }
 }
 
-/// A world named by its file, as an [`EnvConfig`](crate::EnvConfig) holds it: serialised as the path,
-/// loaded (and checked) when deserialised or made with [`WorldRef::load`].
+/// A world named by its file, as an [`EnvConfig`](crate::EnvConfig) holds it, with the texts it was
+/// read from ([`WorldRef::files`]); serialised as its path, or as its record when made from one
+/// (see [`RobotRef`](crate::RobotRef)), and deserialised from either, loaded and checked.
 #[derive(Debug, Clone)]
 pub struct WorldRef {
     path: PathBuf,
     spec: Arc<WorldSpec>,
+    files: Arc<RecordedFiles>,
+    recorded: bool,
 }
 
 impl WorldRef {
     /// Reads and checks a world file.
     pub fn load(path: &Path) -> Result<Self> {
+        let reader = Reader::disk(path);
+        let spec = WorldSpec::read(&reader)?;
         Ok(WorldRef {
             path: path.to_path_buf(),
-            spec: Arc::new(WorldSpec::load(path)?),
+            spec: Arc::new(spec),
+            files: Arc::new(reader.finish()?),
+            recorded: false,
         })
+    }
+
+    /// The world of a record of its files, checked as [`WorldRef::load`] checks a file.
+    pub fn from_record(record: &RecordedFiles) -> Result<Self> {
+        Ok(WorldRef {
+            path: record.path.clone(),
+            spec: Arc::new(WorldSpec::from_record(record)?),
+            files: Arc::new(record.clone()),
+            recorded: true,
+        })
+    }
+
+    /// The texts it was read from: the world file and its heightfield file, if any.
+    pub fn files(&self) -> &RecordedFiles {
+        &self.files
+    }
+
+    /// True when it was made from a record rather than read from its path.
+    pub fn is_recorded(&self) -> bool {
+        self.recorded
     }
 
     /// The file.
@@ -1039,14 +1087,21 @@ impl PartialEq for WorldRef {
 
 impl Serialize for WorldRef {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        self.path.serialize(s)
+        if self.recorded {
+            self.files.serialize(s)
+        } else {
+            self.path.serialize(s)
+        }
     }
 }
 
 impl<'de> Deserialize<'de> for WorldRef {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let path = PathBuf::deserialize(d)?;
-        WorldRef::load(&path).map_err(serde::de::Error::custom)
+        match FileOrRecord::deserialize(d)? {
+            FileOrRecord::Path(path) => WorldRef::load(&path),
+            FileOrRecord::Record(record) => WorldRef::from_record(&record),
+        }
+        .map_err(serde::de::Error::custom)
     }
 }
 

@@ -107,11 +107,35 @@ fn parse_overrides(items: Vec<String>) -> PyResult<String> {
 /// Observation statistics as numpy arrays: mean, variance, count.
 type ObsStats<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64);
 
+/// The texts of the robot and world files of the env of `env_json` (env keywords, JSON), as a model
+/// records them (metadata `env_files`, an SB3 zip's `snakesim_env_files`), as JSON; None without
+/// either file.
+#[pyfunction]
+fn env_file_records(env_json: &str) -> PyResult<Option<String>> {
+    let config = super::parse_config(env_json)?;
+    Ok(model::env_files(&config).map(|v| v.to_string()))
+}
+
+/// A model's recorded files (JSON, see `env_file_records`) applied to its env keywords (JSON): the
+/// keywords to build its env with (a file that no longer holds the recorded texts replaced by its
+/// record) and a note for each file replaced. ValueError, one line, for a record that does not fit.
+#[pyfunction]
+fn apply_env_files(env_json: &str, records_json: &str) -> PyResult<(String, Vec<String>)> {
+    let Value::Object(mut env) = json_value(env_json, "the env keywords")? else {
+        return Err(PyValueError::new_err("the env keywords are not a mapping"));
+    };
+    let records = json_value(records_json, "the recorded files")?;
+    let notes = model::apply_env_files(&mut env, &records)
+        .map_err(|e| PyValueError::new_err(snake_core::error::one_line(e)))?;
+    Ok((Value::Object(env).to_string(), notes))
+}
+
 /// A trained native policy (`model.safetensors` or a checkpoint), ready to act.
 #[pyclass(module = "snakesim._core")]
 struct NativePolicy {
     saved: SavedPolicy,
     path: String,
+    notes: Vec<String>,
     policy: Mutex<(Policy, ChaCha12Rng)>,
 }
 
@@ -124,12 +148,13 @@ impl NativePolicy {
     #[new]
     #[pyo3(signature = (path, seed=0))]
     fn new(path: PathBuf, seed: u64) -> PyResult<Self> {
-        let saved = model::load_policy(&path).map_err(model_error)?;
+        let (saved, notes) = model::load_policy_noted(&path).map_err(model_error)?;
         // `act` gives the policy's own actions; the assist is applied by whoever steps the env
         // (snakesim's Agent.act, through `_core.SteerAssist`), as for any agent.
         let policy = Policy::from_saved(&saved);
         Ok(NativePolicy {
             path: path.display().to_string(),
+            notes,
             saved,
             policy: Mutex::new((policy, ChaCha12Rng::seed_from_u64(seed))),
         })
@@ -139,6 +164,24 @@ impl NativePolicy {
     #[getter]
     fn path(&self) -> &str {
         &self.path
+    }
+
+    /// What loading it found that the user should know, one line each: a robot or world file that
+    /// changed since training (the recorded one is used).
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.notes.clone()
+    }
+
+    /// The texts of the robot and world files its env is built from (metadata `env_files`), as
+    /// JSON; None without either.
+    fn env_files_json(&self) -> PyResult<Option<String>> {
+        let config = self
+            .saved
+            .env
+            .config()
+            .map_err(|e| PyValueError::new_err(e.0))?;
+        Ok(model::env_files(&config).map(|v| v.to_string()))
     }
 
     /// `small`, `large`, or the widths in words (`pi [256, 256], vf [256, 256]`).
@@ -535,6 +578,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_config_flags, m)?)?;
     m.add_function(wrap_pyfunction!(default_run_dir, m)?)?;
     m.add_function(wrap_pyfunction!(arch_label, m)?)?;
+    m.add_function(wrap_pyfunction!(env_file_records, m)?)?;
+    m.add_function(wrap_pyfunction!(apply_env_files, m)?)?;
     m.add_class::<NativePolicy>()?;
     m.add("IDENTITY_KEYS", snake_rl::config::IDENTITY_KEYS.to_vec())?;
     m.add(

@@ -13,6 +13,7 @@
 //! | `joints`, `preset` | the snake |
 //! | `env` | the run's env keywords (JSON), as `snakesim.SnakeEnv` takes them |
 //! | `env_config` | the complete resolved env configuration (JSON); on loading, values the `env` keywords now resolve differently are pinned to it (`pin_recorded_env`) |
+//! | `env_files` | present when the env has a robot or world file: the texts of the files it was built from, `{"robot": {"path": "robots/yaw-pitch-16.yaml", "files": {"yaw-pitch-16.yaml": "...", "yaw-pitch-16.urdf": "..."}}, "world": {...}}` ([`snake_core::RecordedFiles`]); on loading, a file that differs from its record (or is missing) is replaced by the record ([`apply_env_files`]) |
 //! | `observation` | the observation layout (`paper`, `extended`, `terrain`) |
 //! | `action` | the action layout: `N joint targets in [-1, 1] x action_scale rad, head to tail` |
 //! | `steer_assist` | present when `baseline:steer` shares the policy's actions: the assist (JSON, [`SteerAssist`]), applied between the policy and the env wherever the model acts |
@@ -30,7 +31,7 @@ use std::path::Path;
 use rand_chacha::ChaCha12Rng;
 use safetensors::{Dtype, SafeTensors};
 use serde_json::{Map, Value};
-use snake_core::{EnvConfig, Preset, SteerAssist};
+use snake_core::{EnvConfig, Preset, RecordedFiles, SteerAssist};
 
 use crate::nn::{ActorCritic, Arch};
 use crate::normalize::{Normalizer, RunningMeanStd};
@@ -177,6 +178,9 @@ fn policy_entries(p: &SavedPolicy) -> (Vec<Entry>, HashMap<String, String>) {
             "env_config".into(),
             serde_json::to_string(&c).expect("serialises"),
         );
+        if let Some(files) = env_files(&c) {
+            meta.insert("env_files".into(), files.to_string());
+        }
         meta.insert("observation".into(), c.observation.name().to_owned());
         meta.insert(
             "action".into(),
@@ -405,7 +409,8 @@ impl<'a> Parsed<'a> {
         Ok(v)
     }
 
-    fn policy(&self) -> Result<SavedPolicy, ModelError> {
+    /// The policy, and notes for the user (a robot file that changed since training).
+    fn policy(&self) -> Result<(SavedPolicy, Vec<String>), ModelError> {
         let arch: Arch = self
             .meta("arch")?
             .parse()
@@ -420,6 +425,18 @@ impl<'a> Parsed<'a> {
         let mut env: Map<String, Value> = serde_json::from_str(self.meta("env")?)
             .map_err(|e| self.error(format!("metadata 'env' is not a JSON mapping ({e})")))?;
         find_env_files(&mut env, self.path);
+        let notes = match self.meta.get("env_files") {
+            None => Vec::new(),
+            Some(text) => {
+                let records = serde_json::from_str::<Value>(text)
+                    .map_err(|e| self.error(format!("metadata 'env_files' is not JSON ({e})")))?;
+                apply_env_files(&mut env, &records)
+                    .map_err(|e| self.error(e))?
+                    .into_iter()
+                    .map(|n| crate::one_line(format!("{}: {n}", self.path.display())))
+                    .collect()
+            }
+        };
         let mut recorded = match self.meta.get("env_config") {
             None => None,
             Some(text) => Some(
@@ -487,14 +504,15 @@ impl<'a> Parsed<'a> {
         } else {
             None
         };
-        Ok(SavedPolicy {
+        let policy = SavedPolicy {
             net,
             params,
             obs_rms,
             env: spec,
             steer_assist,
             timesteps: self.parse("timesteps")?,
-        })
+        };
+        Ok((policy, notes))
     }
 }
 
@@ -638,6 +656,90 @@ fn set_path(target: &mut Value, path: &[String], value: Value) {
     at[last.as_str()] = value;
 }
 
+/// The `env_files` a model records of `config`: the texts of its robot and world files
+/// (`{"robot": {"path": ..., "files": {name: text}}, "world": ...}`, [`snake_core::RecordedFiles`]),
+/// as they were read when `config` was made; `None` without either.
+pub fn env_files(config: &EnvConfig) -> Option<Value> {
+    let mut files = Map::new();
+    if let Some(robot) = &config.robot {
+        files.insert("robot".into(), record_value(robot.files()));
+    }
+    if let Some(world) = &config.world {
+        files.insert("world".into(), record_value(world.files()));
+    }
+    (!files.is_empty()).then_some(Value::Object(files))
+}
+
+fn record_value(files: &RecordedFiles) -> Value {
+    serde_json::to_value(files).expect("recorded files serialise")
+}
+
+/// Applies a model's `env_files` (see [`env_files`]) to its env keywords, so that the env is the one
+/// it was trained in: a `robot` or `world` path whose files (the main file there, the others beside
+/// it by their recorded names) all hold the recorded texts is kept, and the env reads them as
+/// before; otherwise the keyword becomes the record itself (`{"path": <the keyword's path>, "files":
+/// ...}`, which the env builds from the recorded texts alone), and a note says so, one per file
+/// replaced. A keyword that is a record already is kept. A record that does not build (a file it
+/// lacks or does not use, a text its parser refuses) or does not fit the keywords (an unknown key, a
+/// key the env has no file for, another file name) is an error, one line.
+pub fn apply_env_files(
+    env: &mut Map<String, Value>,
+    records: &Value,
+) -> Result<Vec<String>, String> {
+    let Value::Object(records) = records else {
+        return Err("metadata 'env_files' is not a JSON mapping".into());
+    };
+    let mut notes = Vec::new();
+    for (key, record) in records {
+        if !ENV_FILE_KEYS.contains(&key.as_str()) {
+            return Err(format!(
+                "metadata 'env_files' records '{key}', not a robot or world"
+            ));
+        }
+        let record: RecordedFiles = serde_json::from_value(record.clone())
+            .map_err(|e| format!("metadata 'env_files': {key}: {e}"))?;
+        let path = match env.get(key.as_str()) {
+            Some(Value::String(path)) => std::path::PathBuf::from(path),
+            // Trained on a record already.
+            Some(Value::Object(_)) => continue,
+            _ => {
+                return Err(format!(
+                    "metadata 'env_files' records a {key} file, but its env has no {key} file"
+                ))
+            }
+        };
+        if path.file_name() != record.path.file_name() {
+            return Err(format!(
+                "metadata 'env_files' records the {key} {}, but its env's {key} is {}",
+                record.path.display(),
+                path.display()
+            ));
+        }
+        // Whole and sound, whether or not it is used: exactly the files of a robot (world) that builds.
+        let sound = if key == "robot" {
+            snake_core::RobotRef::from_record(&record).map(drop)
+        } else {
+            snake_core::WorldRef::from_record(&record).map(drop)
+        };
+        sound.map_err(|e| format!("metadata 'env_files': {key}: {}", e.message()))?;
+        let differences = record.differences_at(&path);
+        if differences.is_empty() {
+            continue;
+        }
+        notes.push(format!(
+            "{key} {} changed since training ({}); the {key} recorded in the model is used",
+            path.display(),
+            differences.join(", ")
+        ));
+        let record = RecordedFiles {
+            path,
+            files: record.files,
+        };
+        env.insert(key.clone(), record_value(&record));
+    }
+    Ok(notes)
+}
+
 /// Makes a model usable from any directory: a relative robot or world path that does not exist from
 /// here is looked up from the model's directory and the one above it (`models/` and `robots/` sit side
 /// by side in the repository; a run's model sits in its run directory), and replaced by the first
@@ -673,6 +775,12 @@ pub fn load_policy(path: &Path) -> Result<SavedPolicy, ModelError> {
     parse_policy(path, &read(path)?)
 }
 
+/// [`load_policy`], and what the user should be told about it, one line each (`<model>: robot
+/// robots/yaw-pitch-16.yaml changed since training (...); the robot recorded in the model is used`).
+pub fn load_policy_noted(path: &Path) -> Result<(SavedPolicy, Vec<String>), ModelError> {
+    Parsed::new(path, &read(path)?)?.policy()
+}
+
 /// Reads a checkpoint.
 pub fn load_checkpoint(path: &Path) -> Result<Checkpoint, ModelError> {
     parse_checkpoint(path, &read(path)?)
@@ -682,13 +790,13 @@ pub fn load_checkpoint(path: &Path) -> Result<Checkpoint, ModelError> {
 /// file is read. Any bytes give a policy or a one-line error, never a panic (fuzzed:
 /// fuzz/fuzz_targets/model_file.rs).
 pub fn parse_policy(path: &Path, bytes: &[u8]) -> Result<SavedPolicy, ModelError> {
-    Parsed::new(path, bytes)?.policy()
+    Parsed::new(path, bytes)?.policy().map(|(policy, _)| policy)
 }
 
 /// A checkpoint from a file's bytes, as [`parse_policy`].
 pub fn parse_checkpoint(path: &Path, bytes: &[u8]) -> Result<Checkpoint, ModelError> {
     let p = Parsed::new(path, bytes)?;
-    let policy = p.policy()?;
+    let (policy, _) = p.policy()?;
     let n = policy.net.len();
     let mut adam = Adam::new(n);
     adam.exp_avg = p.f32s("adam.exp_avg", n)?;

@@ -11,7 +11,7 @@ Usage:
 
 A scenario: name, world (path of the world file), body ("cubes" or "urdf"), start [x, y, z, yaw], and
     cubes: joints, preset, steps (driven by snake.py's wave with force 10, as pybullet_reference's gait)
-    urdf:  urdf, inertia, friction, kp, kd, targets (as urdf_reference.py)
+    urdf:  urdf, inertia, friction, kp, kd, max_velocity, targets (as urdf_reference.py)
 
 The world file's generators (rough ground, pegs) are not read here: the tests hand this script their
 expansion (a heightfield CSV, a list of obstacles), which is the input a pybullet user would write.
@@ -31,6 +31,7 @@ from pybullet_utils import bullet_client
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from paper_env_reference import create_snake  # noqa: E402
 from pybullet_reference import MASSES, SnakeWave  # noqa: E402
+from urdf_reference import drive  # noqa: E402
 
 DT = 1.0 / 240.0
 
@@ -139,16 +140,9 @@ def run_urdf(client, scenario, writer):
     with open(scenario["targets"]) as f:
         targets = [[float(v) for v in r] for r in csv.reader(f)]
     writer.writerow(header(m))
+    max_velocity = scenario.get("max_velocity")
     for step, targets_row in enumerate(targets, start=1):
-        client.setJointMotorControlArray(
-            uid,
-            movable,
-            p.POSITION_CONTROL,
-            targetPositions=targets_row,
-            forces=forces,
-            positionGains=[kp] * m,
-            velocityGains=[kd] * m,
-        )
+        drive(client, uid, movable, targets_row, forces, kp, kd, max_velocity)
         client.stepSimulation()
         writer.writerow(row(client, uid, movable, step))
 

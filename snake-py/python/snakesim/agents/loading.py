@@ -20,6 +20,7 @@ import json
 import os
 import re
 import stat
+import sys
 import zipfile
 import zlib
 from collections.abc import Mapping
@@ -96,8 +97,10 @@ class Agent:
     @property
     def body(self) -> str:
         """The body it drives, in words: ``10 joints`` or ``robot robots/yaw-pitch-16.yaml (15 joints)``."""
+        from snakesim.envs.config import file_label
+
         robot = self.env_kwargs.get("robot")
-        return f"{self.joints} joints" if not robot else f"robot {robot} ({self.joints} joints)"
+        return f"{self.joints} joints" if not robot else f"robot {file_label(robot)} ({self.joints} joints)"
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
         """The env's actions for a batch of observations: the policy's own, or with a
@@ -134,6 +137,15 @@ BASELINE_PREFIX = "baseline:"
 EXPORTED_ENV_KEY = "snakesim_env_kwargs"
 #: The entry where it records a native model's ``steer_assist`` (plain JSON), when it has one.
 EXPORTED_ASSIST_KEY = "snakesim_steer_assist"
+#: The entry where snakesim's SB3 trainer and ``snakesim export`` record the texts of the env's robot
+#: and world files (plain JSON, a native model's ``env_files``: docs/formats.md).
+RECORDED_FILES_KEY = "snakesim_env_files"
+
+
+def _note(lines: list[str]) -> None:
+    """Tells the user what loading found (a robot file that changed since training), one line each."""
+    for line in lines:
+        print(f"note: {line}", file=sys.stderr)
 
 
 def bind_assist(where: Path | str, assist: Any, env_kwargs: Mapping[str, Any]) -> Any:
@@ -350,6 +362,7 @@ def _read_native(
         policy = _core.NativePolicy(os.fspath(located.model))
     except ValueError as error:
         raise AgentError(str(error)) from None
+    _note(policy.notes)
     recorded = {"joints": policy.joints, "preset": policy.preset, **json.loads(policy.env_json())}
     env_kwargs = _agreed_env(located.model, recorded, joints, preset, overrides)
     _check_env(located.model, env_kwargs, policy.obs_dim, policy.act_dim)
@@ -389,6 +402,9 @@ def _read_sb3(
         bare_joints = info.action_dim if joints is None else joints
         env_kwargs = {"joints": bare_joints, "preset": preset or ENV_DEFAULTS["preset"], **(overrides or {})}
         hint = f": pass --joints {info.action_dim} (or the observation it was trained with)"
+    if not hint:
+        # The recorded robot and world files, where the env keywords are known (not guessed).
+        env_kwargs = _recorded_files(model, env_kwargs, archive.data.get(RECORDED_FILES_KEY))
     _check_env(model, env_kwargs, info.observation_dim, info.action_dim, hint)
     extras.require("sb3", f"loading the Stable-Baselines3 model {model}")
     policy, arch = _sb3_policy(model, archive, device)
@@ -408,6 +424,23 @@ def _read_sb3(
         files=located.files,
         steer_assist=bind_assist(model, archive.data.get(EXPORTED_ASSIST_KEY), env_kwargs),
     )
+
+
+def _recorded_files(model: Path, env_kwargs: dict[str, Any], records: Any) -> dict[str, Any]:
+    """``env_kwargs`` with the robot and world files an SB3 zip records (``snakesim_env_files``) in
+    place of those that changed since training, with a note for each (as a native model's)."""
+    from snakesim.envs.config import apply_env_files
+
+    if records is None:
+        return env_kwargs
+    if not isinstance(records, dict) or ":serialized:" in records:
+        raise AgentError(f"{model}: its {RECORDED_FILES_KEY} is not a JSON mapping")
+    try:
+        env_kwargs, notes = apply_env_files(env_kwargs, records)
+    except (TypeError, ValueError) as error:
+        raise AgentError(f"{model}: {error}") from None
+    _note([f"{model}: {line}" for line in notes])
+    return env_kwargs
 
 
 # -- SB3 zips -------------------------------------------------------------------------------------

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from snakesim.cli.args import agent_options, baseline_env_options, episodes, goal, load_agent
 from snakesim.cli.errors import UserError, check_writable
+from snakesim.envs.config import file_label
 from snakesim.files import write_atomically
 
 
@@ -19,7 +20,7 @@ def env_line(agent) -> str:
     terrain = kwargs.get("terrain") or {}
     if task is None:
         task = "pegs" if terrain.get("pegs") else "rough" if terrain.get("rough") else None
-    body = f"robot {kwargs['robot']}" if kwargs.get("robot") else f"preset {kwargs['preset']}"
+    body = f"robot {file_label(kwargs['robot'])}" if kwargs.get("robot") else f"preset {kwargs['preset']}"
     prefix = "" if task is None else f"task {task}, "
     return f"{prefix}{agent.joints} joints, {body}"
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Mapping
 from typing import Any
 
@@ -78,6 +79,39 @@ def env_config(**kwargs: Any) -> str:
         # No limit of the env's own: a TimeLimit wrapper truncates (what gymnasium.make adds).
         table["max_episode_steps"] = LIMITS["episode_steps"]
     return json.dumps(table)
+
+
+def file_keyword(value: Any) -> Any:
+    """A ``robot`` or ``world`` keyword as the env keeps it: None, a path as a string, or a record of
+    the file's texts (``{"path": ..., "files": {name: text}}``, what a model records) as it is."""
+    if value is None or isinstance(value, Mapping):
+        return value
+    return os.fspath(value)
+
+
+def file_label(value: Any) -> str:
+    """A ``robot`` or ``world`` keyword in words: its path, or a record's path marked as recorded."""
+    if isinstance(value, Mapping):
+        return f"{value.get('path')} (as recorded in the model)"
+    return str(value)
+
+
+def env_file_records(env_kwargs: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The texts of the robot and world files of the env of ``env_kwargs``, as a model records them
+    (``{"robot": {"path": ..., "files": {name: text}}, "world": ...}``; docs/formats.md), or None
+    when the env has neither."""
+    text = _core.env_file_records(env_config(**env_kwargs))
+    return None if text is None else json.loads(text)
+
+
+def apply_env_files(env_kwargs: Mapping[str, Any], records: Any) -> tuple[dict[str, Any], list[str]]:
+    """A model's recorded files applied to its env keywords: the keywords with each robot or world
+    file that no longer holds the recorded texts replaced by its record, and a note for each.
+    ValueError (one line) for a record that does not fit the keywords."""
+    text, notes = _core.apply_env_files(
+        json.dumps(plain(dict(env_kwargs), "env")), json.dumps(plain(records, "env_files"))
+    )
+    return json.loads(text), list(notes)
 
 
 def observation_slice(structure: Mapping[str, int], name: str) -> slice:

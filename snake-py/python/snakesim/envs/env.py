@@ -16,7 +16,7 @@ from snakesim.envs.config import ENV_DEFAULTS as _D
 from snakesim.envs.config import GOAL_ENV_DEFAULTS as _G
 from snakesim.envs.config import PEGS_ENV_DEFAULTS as _P
 from snakesim.envs.config import ROUGH_ENV_DEFAULTS as _R
-from snakesim.envs.config import action_array, env_config, observation_slice
+from snakesim.envs.config import action_array, env_config, file_keyword, observation_slice
 from snakesim.envs.render import top_down
 
 
@@ -101,12 +101,13 @@ class SnakeEnv(gymnasium.Env):
     velocity) pair per movable joint, and the start places the root link's frame; ``joints`` and
     ``preset`` are ignored), ``world`` (None: the flat plane; or a world file, see ``worlds/`` and
     docs/worlds.md: its ground, friction and obstacles, built at each reset before the robot; raise
-    ``start``'s z on raised ground), ``randomize`` (None; a mapping of ``ground_friction``,
-    ``mass_scale``, ``effort_scale``, ``kp_scale``, ``kd_scale``, ``latency_steps``, ``obs_noise`` and
-    ``skin_friction_scale`` to ``[low, high]``, drawn at each reset from that reset's seed on a stream
-    of its own; reset's ``info["physics"]`` holds the draw; zero-width ranges at the nominal values are
-    the plain env, bit for bit; docs/guide.md, "Randomized physics"), ``render_mode`` (None or
-    "rgb_array").
+    ``start``'s z on raised ground); ``robot`` and ``world`` also take a record of a file's texts
+    (``{"path": ..., "files": {name: text}}``, what a model records: docs/formats.md), ``randomize``
+    (None; a mapping of ``ground_friction``, ``mass_scale``, ``effort_scale``, ``kp_scale``,
+    ``kd_scale``, ``latency_steps``, ``obs_noise`` and ``skin_friction_scale`` to ``[low, high]``,
+    drawn at each reset from that reset's seed on a stream of its own; reset's ``info["physics"]``
+    holds the draw; zero-width ranges at the nominal values are the plain env, bit for bit;
+    docs/guide.md, "Randomized physics"), ``render_mode`` (None or "rgb_array").
 
     **Limits**: positions (start x, y; goals) within 10 km, start heights 0-100 m, reward weights within
     1e6, ``physics_steps_per_env_step`` at most 240, episodes at most 10^7 steps (``snakesim.limits.LIMITS``
@@ -143,8 +144,8 @@ class SnakeEnv(gymnasium.Env):
         observation: str = _D["observation"],
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
-        robot: str | os.PathLike[str] | None = _D["robot"],
-        world: str | os.PathLike[str] | None = _D["world"],
+        robot: str | os.PathLike[str] | Mapping[str, Any] | None = _D["robot"],
+        world: str | os.PathLike[str] | Mapping[str, Any] | None = _D["world"],
         terrain: Mapping[str, Any] | None = _D["terrain"],
         height_map: Mapping[str, Any] | None = _D["height_map"],
         randomize: Mapping[str, Any] | None = _D["randomize"],
@@ -167,8 +168,8 @@ class SnakeEnv(gymnasium.Env):
             observation=observation,
             reward=reward,
             snake=snake,
-            robot=None if robot is None else os.fspath(robot),
-            world=None if world is None else os.fspath(world),
+            robot=file_keyword(robot),
+            world=file_keyword(world),
             terrain=terrain,
             height_map=height_map,
             randomize=randomize,
@@ -339,8 +340,8 @@ class SnakeGoalEnv(SnakeEnv):
         observation: str = _G["observation"],
         reward: Mapping[str, Any] | None = None,
         snake: Mapping[str, Any] | None = None,
-        robot: str | os.PathLike[str] | None = _G["robot"],
-        world: str | os.PathLike[str] | None = _G["world"],
+        robot: str | os.PathLike[str] | Mapping[str, Any] | None = _G["robot"],
+        world: str | os.PathLike[str] | Mapping[str, Any] | None = _G["world"],
         terrain: Mapping[str, Any] | None = _G["terrain"],
         height_map: Mapping[str, Any] | None = _G["height_map"],
         randomize: Mapping[str, Any] | None = _G["randomize"],

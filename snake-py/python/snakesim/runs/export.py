@@ -36,7 +36,7 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from snakesim.agents.loading import EXPORTED_ASSIST_KEY, EXPORTED_ENV_KEY
+    from snakesim.agents.loading import EXPORTED_ASSIST_KEY, EXPORTED_ENV_KEY, RECORDED_FILES_KEY
     from snakesim.envs.sb3 import SnakeVecEnv
     from snakesim.runs.policies import policy_kwargs
 
@@ -77,6 +77,10 @@ def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     # The env it was trained in, as plain JSON in the zip's data (snakesim reads it back; PPO.load
     # sets it as an attribute and ignores it), so the export evaluates on the native model's env.
     setattr(model, EXPORTED_ENV_KEY, dict(agent.env_kwargs))
+    # The texts of its robot and world files, as the native model records them (env_files).
+    records = agent.policy.env_files_json()
+    if records is not None:
+        setattr(model, RECORDED_FILES_KEY, json.loads(records))
     if agent.steer_assist is not None:
         # Plain JSON, as the env keywords: PPO.load users apply it with snakesim.wrappers.SteerAssist.
         setattr(model, EXPORTED_ASSIST_KEY, json.loads(agent.steer_assist.to_json()))

@@ -34,7 +34,14 @@ from typing import Any
 
 from snakesim import _core, extras
 from snakesim.agents.evaluation import run_episodes, summarize
-from snakesim.agents.loading import AgentError, inspect_model, load_normalizer, safe_custom_objects
+from snakesim.agents.loading import (
+    RECORDED_FILES_KEY,
+    AgentError,
+    inspect_model,
+    load_normalizer,
+    safe_custom_objects,
+)
+from snakesim.envs.config import env_file_records
 from snakesim.files import open_regular, read_text, write_atomically
 from snakesim.runs import config as runconfig
 from snakesim.runs import rundir
@@ -299,7 +306,10 @@ class Trainer:
 
         from snakesim.envs.sb3 import SnakeVecEnv
 
-        venv = VecMonitor(SnakeVecEnv(self.config["n_envs"], **runconfig.env_kwargs(self.config)))
+        env_kwargs = runconfig.env_kwargs(self.config)
+        venv = VecMonitor(SnakeVecEnv(self.config["n_envs"], **env_kwargs))
+        # The texts of the robot and world files the envs are built from, recorded in every zip saved.
+        self.env_files = env_file_records(env_kwargs)
         if not self.config["normalize"]:
             return venv
         if self.resume_from is not None:
@@ -456,6 +466,9 @@ class Trainer:
         self.started = time.perf_counter()
         venv = self._make_env()
         self.model = self._make_model(venv)
+        if self.env_files is not None:
+            # Plain JSON in the zip's data (PPO.load sets it as an attribute and ignores it).
+            setattr(self.model, RECORDED_FILES_KEY, self.env_files)
         start_timesteps = self.model.num_timesteps
         self.last_eval_timesteps = -1
         Periodic, Progress = _Callback.classes()
