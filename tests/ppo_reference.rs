@@ -89,7 +89,7 @@ struct PpoCase {
     returns: Vec<f32>,
     old_values: Vec<f32>,
     settings: Settings,
-    /// `init.anchor`'s weight and the controller's action of each row, if the case keeps an anchor.
+    /// `init.anchor`'s weight and the anchor action of each row, if the case keeps an anchor.
     anchor: Option<(f32, Vec<f32>)>,
 }
 
@@ -156,8 +156,7 @@ fn ppo_case(
     }
 }
 
-/// [`ppo_case`] with an anchor of `weight` to a controller's actions (random, within the action
-/// space, as the controllers' are).
+/// [`ppo_case`] with an anchor of `weight` to given actions (random, within the action space).
 fn anchored(mut case: PpoCase, weight: f32, seed: u64) -> PpoCase {
     let mut rng = ChaCha12Rng::seed_from_u64(seed);
     let targets = (0..case.rows * case.net.act_dim())
@@ -419,7 +418,7 @@ fn ppo_update_matches_sb3() {
             },
             4,
         ),
-        // `init.anchor`: the controller's term joins the loss (PPO-small's two-thread update and the
+        // `init.anchor`: the anchor's term joins the loss (PPO-small's two-thread update and the
         // row-split update of a shared trunk both carry it).
         anchored(
             ppo_case("small-10", Arch::Small, 22, 10, 64, default(), 7),

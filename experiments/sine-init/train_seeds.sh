@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Issue 48, item 3: the paper's task at 5, 10, 20 and 30 joints, with and without initialisation by
 # imitation, one training run at a time on both cores (wall times mean nothing with two at once).
-# Each argument is LABEL:JOINTS:SEEDS[:TIMESTEPS]: LABEL "init" (paper-init-10.yaml) or "tuned"
-# (paper-tuned-10.yaml: the same learner at its own learning rate, no init), TIMESTEPS by default
-# the config's.
+# Each argument is LABEL:JOINTS:SEEDS[:TIMESTEPS]: LABEL "anchor" (paper-init-10.yaml as it is: the
+# init, then PPO anchored to the controller), "init" (the same without the anchor: init.anchor=0,
+# PPO alone after the init, bit for bit) or "tuned" (paper-tuned-10.yaml: the same learner at its own
+# learning rate, no init), TIMESTEPS by default the config's.
 #   bash experiments/sine-init/train_seeds.sh init:10:1,2,3,4,5 tuned:20:1,2:524288
 # Runs go to runs/sine-init/LABEL-JOINTS-sSEED; a finished run (model.safetensors) is skipped.
 set -euo pipefail
@@ -11,13 +12,15 @@ cd "$(dirname "$0")/../.."
 CLI=${CLI:-target/release/snake-cli}
 for spec in "$@"; do
   IFS=: read -r label joints seeds timesteps <<<"$spec"
+  extra=()
   case $label in
-    init) config=snake-py/configs/paper-init-10.yaml ;;
+    anchor) config=snake-py/configs/paper-init-10.yaml ;;
+    init) config=snake-py/configs/paper-init-10.yaml extra=(--set init.anchor=0) ;;
     tuned) config=snake-py/configs/paper-tuned-10.yaml ;;
-    *) echo "unknown label $label (init or tuned)" >&2; exit 2 ;;
+    *) echo "unknown label $label (anchor, init or tuned)" >&2; exit 2 ;;
   esac
-  budget=()
-  if [[ -n ${timesteps:-} ]]; then budget=(--timesteps "$timesteps"); fi
+  budget=("${extra[@]}")
+  if [[ -n ${timesteps:-} ]]; then budget+=(--timesteps "$timesteps"); fi
   for seed in ${seeds//,/ }; do
     dir=runs/sine-init/$label-$joints-s$seed
     if [[ -f $dir/model.safetensors ]]; then continue; fi

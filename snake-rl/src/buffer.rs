@@ -32,8 +32,8 @@ pub struct RolloutBuffer {
     pub advantages: Vec<f32>,
     /// Advantages plus values.
     pub returns: Vec<f32>,
-    /// The anchoring controller's actions in the same states (`rows x act_dim`), or empty when the
-    /// run keeps no anchor ([`RolloutBuffer::with_anchors`]).
+    /// The anchor actions in the same states (`rows x act_dim`: `init.anchor`'s fitted policy's
+    /// means), or empty when the run keeps no anchor ([`RolloutBuffer::with_anchors`]).
     pub anchors: Vec<f32>,
 }
 
@@ -59,14 +59,13 @@ impl RolloutBuffer {
         }
     }
 
-    /// The buffer also stores a controller's actions per row ([`RolloutBuffer::set_anchors`]).
+    /// The buffer also stores anchor actions per row ([`RolloutBuffer::set_anchors`]).
     pub fn with_anchors(mut self) -> Self {
         self.anchors = vec![0.0; self.rows() * self.act_dim];
         self
     }
 
-    /// The anchoring controller's actions for the step [`RolloutBuffer::add`] stores next
-    /// (`n_envs` rows).
+    /// The anchor actions for the step [`RolloutBuffer::add`] stores next (`n_envs` rows).
     pub fn set_anchors(&mut self, actions: &[f32]) {
         let width = self.n_envs * self.act_dim;
         let s = self.len;
@@ -233,7 +232,7 @@ pub struct MinibatchData {
     pub returns: Vec<f32>,
     /// Rollout values.
     pub old_values: Vec<f32>,
-    /// The anchoring controller's actions (`rows x act_dim`), empty without an anchor.
+    /// The anchor actions (`rows x act_dim`), empty without an anchor.
     pub anchors: Vec<f32>,
     /// Number of rows.
     pub rows: usize,

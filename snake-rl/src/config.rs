@@ -102,10 +102,10 @@ pub mod limits {
     pub const MAX_INIT_BYTES: u64 = 2 << 30;
     /// Most minibatch size of the imitation fit (`init.batch_size`).
     pub const MAX_INIT_BATCH: u64 = 1 << 16;
-    /// Largest weight of the anchor to the imitated controller (`init.anchor`). The surrogate's
-    /// gradient in the action means grows as 1 / std (about 20 at the init's std of 0.05) while the
-    /// anchor's is its weight times the distance to the controller (hundredths): weights that
-    /// balance them are in the thousands, and a million leaves PPO nothing to say.
+    /// Largest weight of the anchor to the fitted policy (`init.anchor`). The surrogate's gradient
+    /// in the action means grows as 1 / std (about 20 at the init's std of 0.05) while the anchor's
+    /// is its weight times the distance to the fitted policy (hundredths): weights that balance them
+    /// are in the thousands, and a million leaves PPO nothing to say.
     pub const MAX_ANCHOR_WEIGHT: f64 = 1e6;
     /// Most joint counts one `snake-cli bench` measures.
     pub const MAX_BENCH_SIZES: usize = 16;
@@ -401,7 +401,7 @@ impl Default for RunConfig {
 /// minibatches of `batch_size`), the action noise set to `log_std`, and with `critic` the value
 /// network fitted to the controller's discounted returns. With `normalize`, the observation and
 /// return statistics are first updated from the imitation data, so that the fit sees what PPO will.
-/// With `anchor`, PPO keeps the controller's actions as a term of its loss (see [`InitConfig::anchor`]).
+/// With `anchor`, PPO's loss keeps the policy near the fitted one (see [`InitConfig::anchor`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitConfig {
@@ -435,10 +435,12 @@ pub struct InitConfig {
     /// Also fit the value network to the controller's discounted returns (false).
     #[serde(default)]
     pub critic: bool,
-    /// Keeps the fitted policy near the controller during PPO (absent: no anchor). The controller
-    /// runs beside every rollout on the states the policy visits (DAgger's labels), and
-    /// `anchor * mean((mean_action - controller_action)^2)` joins PPO's loss (DAPG's behaviour-cloning
-    /// term): a number, or `lin_<w>` to let go of the controller linearly over the run.
+    /// Holds PPO's policy near the fitted one (absent: no anchor): the fitted policy, frozen (the
+    /// checkpoint at 0 timesteps), acts beside every rollout on the states PPO's policy visits, and
+    /// `anchor * mean((mean_action - fitted_mean_action)^2)` joins PPO's loss (the penalty towards a
+    /// reference policy of RL fine-tuning; with equal noise, a KL divergence up to scale). A number,
+    /// or `lin_<w>` to let go linearly over the run. The controller itself is no anchor: its wave
+    /// follows its own clock, so in states off its own path its actions belong to another phase.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub anchor: Option<Schedule>,
 }

@@ -419,6 +419,9 @@ struct Run {
     init_pending: bool,
     /// Seconds of this session's `init` (its evaluation excluded).
     init_seconds: f64,
+    /// With `init.anchor`, once the init is done: the fitted policy (also the checkpoint at 0
+    /// timesteps, from which a resumed run reads it).
+    anchor: Option<SavedPolicy>,
 }
 
 impl Run {
@@ -451,6 +454,18 @@ impl Run {
             other => (other, 0.0),
         };
         let init_pending = config.init.is_some() && checkpoint.is_none();
+        let anchored = config.init.as_ref().is_some_and(|i| i.anchor.is_some());
+        let anchor = if anchored && !init_pending {
+            let path = dir.checkpoint_path(0);
+            let policy = model::load_policy(&path).map_err(|e| {
+                TrainError::Setup(format!(
+                    "init.anchor: the run resumes after its init, whose fitted policy it anchors to: {e}"
+                ))
+            })?;
+            Some(policy)
+        } else {
+            None
+        };
         let (learner, normalizer, rng, timesteps, n_updates, wall_offset) = match checkpoint {
             Some(c) => {
                 if c.policy.net != net {
@@ -517,6 +532,7 @@ impl Run {
             ramped_energy_weight: None,
             init_pending,
             init_seconds: 0.0,
+            anchor,
             config,
         })
     }
@@ -815,6 +831,9 @@ impl Run {
         params[o..o + net.act_dim()].fill(init.log_std as f32);
         self.learner.params.copy_from_slice(&params);
         self.init_pending = false;
+        if init.anchor.is_some() {
+            self.anchor = Some(self.saved_policy());
+        }
         let seconds = start.elapsed().as_secs_f64();
         self.init_seconds = seconds;
         self.log_at(init.epochs as u64, &[("init/seconds", seconds)])?;
@@ -868,12 +887,14 @@ impl Run {
             norm.normalize_obs(&mut obs);
         }
         let mut buffer = RolloutBuffer::new(c.ppo.n_steps, m, d, n);
-        let anchor = match &c.init {
-            Some(init) if init.anchor.is_some() => {
+        let anchor = match (&self.anchor, c.init.as_ref().and_then(|i| i.anchor)) {
+            (Some(policy), Some(_)) => {
                 buffer = buffer.with_anchors();
-                let controller = JointsSine::new(init.imitate, &self.env_config, m)
-                    .map_err(|e| TrainError::Setup(format!("init.imitate: {}", e.message())))?;
-                Some((controller, vec![0.0; m * n]))
+                Some(Anchor {
+                    ws: policy.net.workspace(m),
+                    obs: vec![0.0; m * d],
+                    policy: policy.clone(),
+                })
             }
             _ => None,
         };
@@ -932,10 +953,16 @@ impl Run {
                 &mut r.log_probs,
             );
             act::clip_to_action_space(&r.actions, &mut r.clipped);
-            if let Some((controller, targets)) = &mut r.anchor {
-                // What the controller would do in these states (the envs' raw observations).
-                controller.act(&r.out.obs, targets);
-                r.buffer.set_anchors(targets);
+            if let Some(anchor) = &mut r.anchor {
+                // The fitted policy's action means in these states, from the envs' raw
+                // observations normalised with its own statistics (as its model file acts).
+                anchor.obs.copy_from_slice(&r.out.obs);
+                if let Some(rms) = &anchor.policy.obs_rms {
+                    rms.normalize(&mut anchor.obs);
+                }
+                let p = &anchor.policy;
+                p.net.forward(&p.params, &anchor.obs, m, &mut anchor.ws);
+                r.buffer.set_anchors(&anchor.ws.mean[..m * p.net.act_dim()]);
             }
             let finals = match &self.assist {
                 None => r.envs.step_into(&r.clipped, &mut r.out)?,
@@ -953,9 +980,6 @@ impl Run {
             // The finished episodes: statistics, and the final observations of truncated ones.
             let mut bootstrap: Vec<(usize, Vec<f32>)> = Vec::new();
             for f in finals.iter() {
-                if let Some((controller, _)) = &mut r.anchor {
-                    controller.reset(f.env);
-                }
                 if self.episodes.len() == 100 {
                     self.episodes.pop_front();
                 }
@@ -1160,9 +1184,16 @@ struct Rollout {
     dones: Vec<bool>,
     /// A truncated episode's final observation.
     terminal: Vec<f32>,
-    /// With `init.anchor`: the imitated controller, run beside the policy on the same envs (restarted
-    /// with each of their episodes), and its actions of the current step.
-    anchor: Option<(JointsSine, Vec<f32>)>,
+    /// With `init.anchor`: the fitted policy the loss keeps PPO's policy near.
+    anchor: Option<Anchor>,
+}
+
+/// The policy `init.anchor` holds PPO's near (the fitted policy, frozen), and its scratch.
+struct Anchor {
+    policy: SavedPolicy,
+    ws: Workspace,
+    /// The step's observations, normalised with the anchor's statistics.
+    obs: Vec<f32>,
 }
 
 fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {

@@ -297,9 +297,9 @@ fn bad_init_tables_name_the_key() {
     );
 }
 
-/// The policy's mean squared distance to the steered sine on 2048 fresh steps of the controller, the
-/// observations normalised with the model's statistics.
-fn distance_to_controller(config: &RunConfig, model_file: &Path) -> f64 {
+/// Mean squared difference of two policies' action means on 2048 steps of the steered sine, each
+/// normalising the observations with its own statistics (as their model files act).
+fn distance(config: &RunConfig, a: &Path, b: &Path) -> f64 {
     let env = config.env_config().unwrap();
     let mut envs = VecSnakeEnv::new(env.clone(), 2)
         .unwrap()
@@ -319,60 +319,57 @@ fn distance_to_controller(config: &RunConfig, model_file: &Path) -> f64 {
     )
     .unwrap()
     .unwrap();
-    let mut data = data;
-    let policy = model::load_policy(model_file).unwrap();
-    policy.obs_rms.as_ref().unwrap().normalize(&mut data.obs);
-    imitate::bc_loss(&policy.net, &policy.params, &data)
+    let means = |file: &Path| {
+        let policy = model::load_policy(file).unwrap();
+        let mut obs = data.obs.clone();
+        if let Some(rms) = &policy.obs_rms {
+            rms.normalize(&mut obs);
+        }
+        let mut ws = policy.net.workspace(data.rows);
+        policy.net.forward(&policy.params, &obs, data.rows, &mut ws);
+        ws.mean[..data.rows * policy.net.act_dim()].to_vec()
+    };
+    let (x, y) = (means(a), means(b));
+    x.iter()
+        .zip(&y)
+        .map(|(p, q)| f64::from((p - q) * (p - q)))
+        .sum::<f64>()
+        / x.len() as f64
 }
 
-/// `init.anchor`: a weight of 0 is PPO alone, bit for bit (the controller runs beside the rollouts
-/// but no term joins the loss); with the fit itself made negligible (one epoch at a learning rate of
-/// 1e-6), a heavy anchor alone brings PPO's policy towards the controller while plain PPO (at a
-/// learning rate that moves it) walks away, and the anchor's loss is logged.
+/// `init.anchor`: a weight of 0 is PPO alone, bit for bit (the fitted policy acts beside the
+/// rollouts but no term joins the loss); at a learning rate and noise that move PPO's policy, a
+/// heavy anchor holds it near the fitted policy; the anchor's loss is logged; a run stopped after its
+/// init resumes anchored to the fitted policy of its checkpoint (measured: mean squared distances
+/// 0.0094 free, 0.0015 anchored, 0.0021 anchored and resumed; PPO's steps at this rate leave a floor).
 #[test]
-fn an_anchor_keeps_the_policy_at_its_controller() {
+fn an_anchor_holds_the_policy_near_the_fitted_one() {
+    let config = |anchor: Value| {
+        tiny(json!({
+            "joints": 3, "normalize": true, "timesteps": 4096, "eval_freq": 0,
+            "ppo": {"learning_rate": 1e-3, "n_epochs": 5},
+            "init": {"epochs": 20, "steps": 4096, "log_std": -1.0, "anchor": anchor},
+        }))
+    };
     let run = |anchor: Value, name: &str| {
         let dir = scratch(name);
-        let config = tiny(json!({
-            "joints": 3, "normalize": true, "timesteps": 8192, "eval_freq": 0,
-            "ppo": {"learning_rate": 1e-3, "n_epochs": 5, "max_grad_norm": 100.0},
-            "init": {"epochs": 1, "learning_rate": 1e-6, "log_std": -1.0, "anchor": anchor},
-        }));
-        struct Show;
-        impl Observer for Show {
-            fn on_update(&mut self, p: &trainer::Progress) {
-                eprintln!(
-                    "DEBUG anchor_loss {:.6} policy {:.4}",
-                    p.update.anchor_loss, p.update.policy_gradient_loss
-                );
-            }
-            fn on_note(&mut self, _message: &str) {}
-        }
-        trainer::train(&session(config.clone(), &dir, false), &mut Show).unwrap();
-        (config, dir)
+        trainer::train(&session(config(anchor), &dir, false), &mut Silent).unwrap();
+        dir
     };
-    let (plain_config, plain) = run(Value::Null, "anchor-none");
-    assert!(plain_config.init.as_ref().unwrap().anchor.is_none());
-    let (_, zero) = run(json!(0.0), "anchor-zero");
+    let plain = run(Value::Null, "anchor-none");
+    let zero = run(json!(0.0), "anchor-zero");
     assert!(params(&plain) == params(&zero), "anchor 0 changed the run");
-    let (config, heavy) = run(json!(10000.0), "anchor-heavy");
+    let heavy = run(json!(1000.0), "anchor-heavy");
+    let fitted = |dir: &Path| dir.join("checkpoints").join("model_0_steps.safetensors");
+    let c = config(Value::Null);
     let (free, kept) = (
-        distance_to_controller(&plain_config, &plain.join("model.safetensors")),
-        distance_to_controller(&config, &heavy.join("model.safetensors")),
-    );
-    let start = distance_to_controller(
-        &config,
-        &heavy.join("checkpoints").join("model_0_steps.safetensors"),
+        distance(&c, &plain.join("model.safetensors"), &fitted(&plain)),
+        distance(&c, &heavy.join("model.safetensors"), &fitted(&heavy)),
     );
     println!(
-        "mse to the controller: at the start {start:.5}; after PPO without anchor {free:.5}, \
-         anchored {kept:.5}"
+        "mean squared distance to the fitted policy after PPO: free {free:.6}, anchored {kept:.6}"
     );
-    // Measured: 0.0076 at the start, 0.032 without the anchor, 0.0032 with it.
-    assert!(
-        kept < 0.5 * start && kept < 0.2 * free,
-        "start {start}, anchored {kept}, free {free}"
-    );
+    assert!(kept < 0.2 * free, "anchored {kept}, free {free}");
     let tb = heavy
         .join(snake_rl::rundir::TB_DIR)
         .join(snake_rl::rundir::TB_RUN);
@@ -386,7 +383,41 @@ fn an_anchor_keeps_the_policy_at_its_controller() {
             "{tag} not logged"
         );
     }
-    for d in [plain, zero, heavy] {
+    // Stopped after the init and resumed: the same parameters as the run never stopped.
+    let stopped = scratch("anchor-stopped");
+    struct StopAt(u64, u64);
+    impl Observer for StopAt {
+        fn on_step(&mut self, t: u64) {
+            self.1 = t;
+        }
+        fn should_stop(&mut self) -> bool {
+            self.1 >= self.0
+        }
+        fn on_note(&mut self, _message: &str) {}
+    }
+    let outcome = trainer::train(
+        &session(config(json!(1000.0)), &stopped, false),
+        &mut StopAt(1500, 0),
+    )
+    .unwrap();
+    assert!(matches!(outcome, Outcome::Interrupted(..)));
+    trainer::train(&session(config(json!(1000.0)), &stopped, true), &mut Silent).unwrap();
+    // (A resumed run draws new episodes, as SB3 does: held near the same fitted policy, not equal.)
+    let resumed = distance(&c, &stopped.join("model.safetensors"), &fitted(&stopped));
+    assert!(resumed < 0.3 * free, "resumed {resumed}, free {free}");
+    // Without its fitted policy, a resumed anchored run says so.
+    std::fs::remove_dir_all(&stopped).ok();
+    trainer::train(
+        &session(config(json!(1000.0)), &stopped, false),
+        &mut StopAt(1500, 0),
+    )
+    .unwrap();
+    std::fs::remove_file(fitted(&stopped)).unwrap();
+    let e = trainer::train(&session(config(json!(1000.0)), &stopped, true), &mut Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("init.anchor:") && !e.contains('\n'), "{e}");
+    for d in [plain, zero, heavy, stopped] {
         std::fs::remove_dir_all(d).ok();
     }
 }

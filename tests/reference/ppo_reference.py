@@ -9,7 +9,7 @@ SPEC.json holds a list of cases; each is one of:
   rows), so the loss terms come from SB3's logger, the clipped gradients from the parameters' ``.grad``
   and the parameters after one Adam step from the policy. Before training, ``evaluate_actions`` gives
   the log-probabilities, entropies and values, and the distribution the action means. With an
-  "anchor" (a weight w and a controller's action per row), the loss gains ``w * mse_loss(mean,
+  "anchor" (a weight w and an anchor action per row), the loss gains ``w * mse_loss(mean,
   targets)`` (snakesim's `init.anchor`): torch's autograd gives that term's gradient on a fresh copy
   of the policy, added to SB3's, and ``torch.optim.Adam(eps=1e-5)`` takes the step with the sum
   (such cases set max_grad_norm beyond reach: the gradients are compared unclipped).

@@ -10,10 +10,10 @@
 //! loss   = policy + ent_coef * entropy_loss + vf_coef * value
 //! ```
 //!
-//! A run that initialises by imitation may keep an anchor to its controller (`init.anchor`, weight
-//! `w`): `loss += w * mean((mean_action - controller_action)^2)` over the minibatch's rows and action
-//! dimensions, the controller acting on the states the policy visited (DAgger's labels; DAPG's
-//! behaviour-cloning term). With `w = 0` nothing of it is computed: SB3's loss, bit for bit.
+//! A run that initialises by imitation may keep an anchor (`init.anchor`, weight `w`):
+//! `loss += w * mean((mean_action - anchor_action)^2)` over the minibatch's rows and action
+//! dimensions, the anchor actions being the fitted policy's means in the states PPO's policy visited.
+//! With `w = 0` nothing of it is computed: SB3's loss, bit for bit.
 //!
 //! The gradient is written out by hand (no autograd): through the Gaussian's log-probability to the
 //! action means and `log_std`, and through the value head; [`ActorCritic::backward`] takes it from
@@ -38,7 +38,7 @@ pub struct LossSettings {
     pub vf_coef: f32,
     /// Normalise advantages per minibatch (SB3's `normalize_advantage`).
     pub normalize_advantage: bool,
-    /// Weight of the anchor to the controller's actions (0: no anchor, SB3's loss).
+    /// Weight of the anchor (0: no anchor, SB3's loss).
     pub anchor_weight: f32,
 }
 
@@ -58,8 +58,8 @@ pub struct Minibatch<'a> {
     pub returns: &'a [f32],
     /// Values under the rollout's policy.
     pub old_values: &'a [f32],
-    /// `rows x act_dim` actions of the anchoring controller in the same states, or empty without an
-    /// anchor.
+    /// `rows x act_dim` anchor actions (the fitted policy's means) in the same states, or empty
+    /// without an anchor.
     pub anchors: &'a [f32],
     /// Number of rows.
     pub rows: usize,
@@ -94,8 +94,7 @@ pub struct LossStats {
     pub value_loss: f32,
     /// Minus the mean entropy.
     pub entropy_loss: f32,
-    /// Mean squared distance of the action means to the anchoring controller's actions (0 without an
-    /// anchor).
+    /// Mean squared distance of the action means to the anchor actions (0 without an anchor).
     pub anchor_loss: f32,
     /// `policy + ent_coef * entropy_loss + vf_coef * value (+ anchor_weight * anchor_loss)`.
     pub loss: f32,
@@ -116,7 +115,7 @@ pub struct LossSums {
     pub kl: f64,
     /// Rows with a clipped ratio.
     pub clipped: usize,
-    /// Sum of squared distances to the anchoring controller's actions (every action dimension).
+    /// Sum of squared distances to the anchor actions (every action dimension).
     pub anchor_error: f64,
 }
 

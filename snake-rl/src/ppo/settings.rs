@@ -34,7 +34,7 @@ pub struct UpdateStats {
     pub approx_kl: f64,
     /// Mean fraction of clipped ratios.
     pub clip_fraction: f64,
-    /// Mean squared distance to the anchoring controller's actions (0 without an anchor).
+    /// Mean squared distance to the anchor actions (0 without an anchor).
     pub anchor_loss: f64,
     /// The last minibatch's total loss.
     pub loss: f64,
