@@ -170,6 +170,22 @@ def test_the_robot_agent_reaches_its_goals_from_any_directory(tmp_path):
     assert report["success_rate"] == 1.0, report
 
 
+def test_the_robust_robot_agent_records_its_physics_and_reaches_its_goals():
+    # Trained under randomized physics on the robot with its servos' speed limit
+    # (models/robust-yaw-pitch-16.md); here under nominal physics, which its card measures at 1.00.
+    model = MODELS / "robust-yaw-pitch-16.safetensors"
+    assert set(env_kwargs_of(model)["randomize"]) == {
+        "ground_friction",
+        "mass_scale",
+        "effort_scale",
+        "latency_steps",
+        "obs_noise",
+    }
+    nominal = ROOT / "snake-py" / "configs" / "randomize" / "nominal.yaml"
+    report = _evaluate(str(model), "--episodes", "4", "--seed", "777000", "--randomize", str(nominal))
+    assert report["randomize"] == {} and report["success_rate"] == 1.0, report
+
+
 def test_a_model_is_shipped():
     assert (MODELS / "goal-5.safetensors").is_file()
     assert snakesim.GOAL_ENV_ID == "snakesim/SnakeGoal-v0"
