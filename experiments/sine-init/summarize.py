@@ -40,6 +40,13 @@ def scalars(run: Path) -> dict[str, list[float]]:
     return out
 
 
+LEARNERS = {
+    "anchor": "init, PPO anchored (paper-init-10.yaml)",
+    "init": "init, PPO alone (init.anchor=0)",
+    "tuned": "no init (paper-tuned-10)",
+}
+
+
 def fmt(values: list[float], digits: int = 0) -> str:
     if not values:
         return "-"
@@ -67,9 +74,14 @@ def main(root: Path) -> None:
         firsts = [f for f in map(first_perfect, history) if f is not None]
         last = [rows[-1] for rows in history]
         finals = [success(evals / f"{r.name}.json") for r in runs]
-        alone = [success(evals / f"{r.name}-alone.json") for r in runs] if label == "init" else []
+        # An anchor run's fitted policy is its init run's, bit for bit (the anchor acts after it).
+        alone = [
+            success(evals / f"{r.name.replace('anchor-', 'init-', 1)}-alone.json")
+            for r in runs
+            if label in ("init", "anchor")
+        ]
         print(
-            f"| {joints} | {'init' if label == 'init' else 'no init (paper-tuned-10)'} | "
+            f"| {joints} | {LEARNERS[label]} | "
             f"{','.join(r.name.rsplit('-s', 1)[1] for r in runs)} | {int(last[0]['timesteps']):,} | "
             f"{fmt([float(x['wall_time']) for x in last])} s | {len(firsts)} of {len(runs)} | "
             f"{fmt([w for _, w in firsts], 1)} s | {fmt([t for t, _ in firsts])} | "

@@ -7,6 +7,7 @@
 # learning rate, no init), TIMESTEPS by default the config's.
 #   bash experiments/sine-init/train_seeds.sh init:10:1,2,3,4,5 tuned:20:1,2:524288
 # Runs go to runs/sine-init/LABEL-JOINTS-sSEED; a finished run (model.safetensors) is skipped.
+# THREADS (default 2): the training threads of each run.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 CLI=${CLI:-target/release/snake-cli}
@@ -27,6 +28,6 @@ for spec in "$@"; do
     rm -rf "$dir"
     echo "$(date -u +%T) $dir"
     "$CLI" train --config "$config" --set joints="$joints" --seed "$seed" "${budget[@]}" \
-      --threads 2 --no-progress --run-dir "$dir"
+      --threads "${THREADS:-2}" --no-progress --run-dir "$dir"
   done
 done

@@ -202,21 +202,16 @@ def test_log_over_the_size_limit(logged, tmp_path, capsys):
     assert "huge.csv" in err and "csv_bytes" in err, err
 
 
+def _kp_fit(targets, log):
+    """A fit of motors.kp alone on `targets` and `log`: what the bad-table tests vary."""
+    return ["--robot", str(ROBOT), "--targets", str(targets), "--log", str(log), "--fit", "motors.kp=0.1:1"]
+
+
 def test_targets_that_do_not_match_the_robot(logged, tmp_path, capsys):
     targets = tmp_path / "t.csv"
     lines = (logged / "targets.csv").read_text().splitlines()
     targets.write_text("\n".join(line.rsplit(",", 1)[0] for line in lines) + "\n")
-    args = [
-        "--robot",
-        str(ROBOT),
-        "--targets",
-        str(targets),
-        "--log",
-        str(logged / "log.csv"),
-        "--fit",
-        "motors.kp=0.1:1",
-    ]
-    err = _run(args, tmp_path, capsys)
+    err = _run(_kp_fit(targets, logged / "log.csv"), tmp_path, capsys)
     assert "t.csv" in err, err
 
 
@@ -247,17 +242,7 @@ def test_bad_targets_are_one_line(logged, tmp_path, capsys, change, expected):
             f.truncate(LIMITS["csv_bytes"] + 1)  # sparse: no disk used
     else:
         targets.write_text("\n".join(lines) + "\n")
-    args = [
-        "--robot",
-        str(ROBOT),
-        "--targets",
-        str(targets),
-        "--log",
-        str(logged / "log.csv"),
-        "--fit",
-        "motors.kp=0.1:1",
-    ]
-    err = _run(args, tmp_path, capsys)
+    err = _run(_kp_fit(targets, logged / "log.csv"), tmp_path, capsys)
     assert expected in err and "bad.csv" in err, err
 
 

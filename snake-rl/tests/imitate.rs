@@ -167,6 +167,19 @@ impl Observer for StopInInit {
     fn on_note(&mut self, _message: &str) {}
 }
 
+/// Stops once the run has taken `.0` timesteps.
+struct StopAt(u64, u64);
+
+impl Observer for StopAt {
+    fn on_step(&mut self, t: u64) {
+        self.1 = t;
+    }
+    fn should_stop(&mut self) -> bool {
+        self.1 >= self.0
+    }
+    fn on_note(&mut self, _message: &str) {}
+}
+
 #[test]
 fn resume_goes_through_the_init() {
     let (whole, stopped) = (scratch("whole"), scratch("stopped"));
@@ -196,16 +209,6 @@ fn resume_goes_through_the_init() {
     assert_eq!(fitted.reason, "init");
     // Stopped after the init: its checkpoints hold the fitted policy, and resuming does not redo it.
     std::fs::remove_dir_all(&stopped).ok();
-    struct StopAt(u64, u64);
-    impl Observer for StopAt {
-        fn on_step(&mut self, t: u64) {
-            self.1 = t;
-        }
-        fn should_stop(&mut self) -> bool {
-            self.1 >= self.0
-        }
-        fn on_note(&mut self, _message: &str) {}
-    }
     let outcome = trainer::train(
         &session(tiny(json!({})), &stopped, false),
         &mut StopAt(700, 0),
@@ -385,16 +388,6 @@ fn an_anchor_holds_the_policy_near_the_fitted_one() {
     }
     // Stopped after the init and resumed: the same parameters as the run never stopped.
     let stopped = scratch("anchor-stopped");
-    struct StopAt(u64, u64);
-    impl Observer for StopAt {
-        fn on_step(&mut self, t: u64) {
-            self.1 = t;
-        }
-        fn should_stop(&mut self) -> bool {
-            self.1 >= self.0
-        }
-        fn on_note(&mut self, _message: &str) {}
-    }
     let outcome = trainer::train(
         &session(config(json!(1000.0)), &stopped, false),
         &mut StopAt(1500, 0),
