@@ -202,16 +202,18 @@ def test_log_over_the_size_limit(logged, tmp_path, capsys):
     assert "huge.csv" in err and "csv_bytes" in err, err
 
 
-def _kp_fit(targets, log):
-    """A fit of motors.kp alone on `targets` and `log`: what the bad-table tests vary."""
-    return ["--robot", str(ROBOT), "--targets", str(targets), "--log", str(log), "--fit", "motors.kp=0.1:1"]
+def _fit(targets, log, *fits):
+    """The calibrate arguments of a fit of `fits` (KEY=LOW:HIGH each) on `targets` and `log`."""
+    return ["--robot", str(ROBOT), "--targets", str(targets), "--log", str(log)] + [
+        arg for fit in fits for arg in ("--fit", fit)
+    ]
 
 
 def test_targets_that_do_not_match_the_robot(logged, tmp_path, capsys):
     targets = tmp_path / "t.csv"
     lines = (logged / "targets.csv").read_text().splitlines()
     targets.write_text("\n".join(line.rsplit(",", 1)[0] for line in lines) + "\n")
-    err = _run(_kp_fit(targets, logged / "log.csv"), tmp_path, capsys)
+    err = _run(_fit(targets, logged / "log.csv", "motors.kp=0.1:1"), tmp_path, capsys)
     assert "t.csv" in err, err
 
 
@@ -242,7 +244,7 @@ def test_bad_targets_are_one_line(logged, tmp_path, capsys, change, expected):
             f.truncate(LIMITS["csv_bytes"] + 1)  # sparse: no disk used
     else:
         targets.write_text("\n".join(lines) + "\n")
-    err = _run(_kp_fit(targets, logged / "log.csv"), tmp_path, capsys)
+    err = _run(_fit(targets, logged / "log.csv", "motors.kp=0.1:1"), tmp_path, capsys)
     assert expected in err and "bad.csv" in err, err
 
 
@@ -263,34 +265,13 @@ def test_bad_targets_are_one_line(logged, tmp_path, capsys, change, expected):
     ],
 )
 def test_bad_fit_keys_are_one_line(logged, tmp_path, capsys, fit, expected):
-    args = [
-        "--robot",
-        str(ROBOT),
-        "--targets",
-        str(logged / "targets.csv"),
-        "--log",
-        str(logged / "log.csv"),
-        "--fit",
-        fit,
-    ]
-    err = _run(args, tmp_path, capsys)
+    err = _run(_fit(logged / "targets.csv", logged / "log.csv", fit), tmp_path, capsys)
     assert expected in err and fit.split("=")[0] in err, err
 
 
 def test_a_fit_key_given_twice_is_one_line(logged, tmp_path, capsys):
-    args = [
-        "--robot",
-        str(ROBOT),
-        "--targets",
-        str(logged / "targets.csv"),
-        "--log",
-        str(logged / "log.csv"),
-        "--fit",
-        "motors.kp=0.1:1",
-        "--fit",
-        "motors.kp=0.2:2",
-    ]
-    err = _run(args, tmp_path, capsys)
+    fits = ("motors.kp=0.1:1", "motors.kp=0.2:2")
+    err = _run(_fit(logged / "targets.csv", logged / "log.csv", *fits), tmp_path, capsys)
     assert "--fit motors.kp: given twice" in err, err
 
 

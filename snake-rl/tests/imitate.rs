@@ -4,11 +4,12 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Map, Value};
 use snake_core::controllers::{Imitable, JointsSine};
-use snake_core::{StepBuffers, VecSnakeEnv};
+use snake_core::{EnvConfig, StepBuffers, VecSnakeEnv};
 use snake_rl::config::{InitConfig, RunConfig};
 use snake_rl::imitate;
 use snake_rl::model;
 use snake_rl::nn::{init_params, ActorCritic};
+use snake_rl::normalize::Normalizer;
 use snake_rl::trainer::{self, InitProgress, Observer, Outcome, Session, Silent};
 
 fn scratch(name: &str) -> PathBuf {
@@ -43,6 +44,33 @@ fn params(dir: &Path) -> Vec<u32> {
     p.params.iter().map(|x| x.to_bits()).collect()
 }
 
+/// `steps` steps of the steered sine driving 2 envs of `env` reset with `seed`, one thread.
+fn steered_sine(
+    env: &EnvConfig,
+    steps: u64,
+    seed: u64,
+    normalizer: Option<&mut Normalizer>,
+) -> imitate::Demonstrations {
+    let mut envs = VecSnakeEnv::new(env.clone(), 2)
+        .unwrap()
+        .with_threads(1)
+        .unwrap();
+    let mut out = StepBuffers::for_envs(&envs);
+    envs.reset(Some(seed), &mut out.obs).unwrap();
+    let mut controller = JointsSine::new(Imitable::SteeredSine, env, 2).unwrap();
+    imitate::collect(
+        &mut controller,
+        &mut envs,
+        &mut out,
+        steps,
+        0.99,
+        normalizer,
+        &mut |_| false,
+    )
+    .unwrap()
+    .unwrap()
+}
+
 /// Behaviour cloning on a tiny env (3 joints, 2 envs x 2048 steps of the steered sine, PPO-small):
 /// the mean squared error to the controller's actions falls from that of the untrained network
 /// (means near 0: about the actions' mean square; measured 0.054) to below 1e-3 in 20 epochs
@@ -54,25 +82,8 @@ fn behaviour_cloning_fits_the_controller() {
     let config =
         RunConfig::from_yaml("joints: 3\nn_envs: 2\nenv: {max_episode_steps: 500}").unwrap();
     let env = config.env_config().unwrap();
-    let mut envs = VecSnakeEnv::new(env.clone(), 2)
-        .unwrap()
-        .with_threads(1)
-        .unwrap();
-    let mut out = StepBuffers::for_envs(&envs);
-    envs.reset(Some(3), &mut out.obs).unwrap();
-    let mut controller = JointsSine::new(Imitable::SteeredSine, &env, 2).unwrap();
-    let mut norm = snake_rl::normalize::Normalizer::new(env.observation_dim(), 2, 0.99);
-    let data = imitate::collect(
-        &mut controller,
-        &mut envs,
-        &mut out,
-        4096,
-        0.99,
-        Some(&mut norm),
-        &mut |_| false,
-    )
-    .unwrap()
-    .unwrap();
+    let mut norm = Normalizer::new(env.observation_dim(), 2, 0.99);
+    let data = steered_sine(&env, 4096, 3, Some(&mut norm));
     assert_eq!(data.rows, 4096);
     assert!(
         data.obs.iter().all(|x| x.abs() <= 10.0),
@@ -303,25 +314,7 @@ fn bad_init_tables_name_the_key() {
 /// Mean squared difference of two policies' action means on 2048 steps of the steered sine, each
 /// normalising the observations with its own statistics (as their model files act).
 fn distance(config: &RunConfig, a: &Path, b: &Path) -> f64 {
-    let env = config.env_config().unwrap();
-    let mut envs = VecSnakeEnv::new(env.clone(), 2)
-        .unwrap()
-        .with_threads(1)
-        .unwrap();
-    let mut out = StepBuffers::for_envs(&envs);
-    envs.reset(Some(77), &mut out.obs).unwrap();
-    let mut controller = JointsSine::new(Imitable::SteeredSine, &env, 2).unwrap();
-    let data = imitate::collect(
-        &mut controller,
-        &mut envs,
-        &mut out,
-        2048,
-        0.99,
-        None,
-        &mut |_| false,
-    )
-    .unwrap()
-    .unwrap();
+    let data = steered_sine(&config.env_config().unwrap(), 2048, 77, None);
     let means = |file: &Path| {
         let policy = model::load_policy(file).unwrap();
         let mut obs = data.obs.clone();
