@@ -28,12 +28,15 @@ fn episode_dict<'py>(py: Python<'py>, e: &Episode) -> PyResult<Bound<'py, PyDict
     d.set_item("speed", e.speed())?;
     d.set_item("path_efficiency", e.path_efficiency())?;
     d.set_item("cost_of_transport", e.cost_of_transport())?;
+    if e.physics.values().next().is_some() {
+        d.set_item("physics", crate::physics_dict(py, &e.physics)?)?;
+    }
     Ok(d)
 }
 
 /// run_episodes(config_json, episodes, seed, act) -> list of episode dicts (ret, steps, success,
 /// seconds, distance, path_length, work, weight, and the derived speed, path_efficiency and
-/// cost_of_transport, None where undefined). `act(obs)` gets the observations of the envs that run
+/// cost_of_transport, None where undefined; under `randomize`, physics: the episode's draws). `act(obs)` gets the observations of the envs that run
 /// at once, float32 of shape (m, observation_dim), and returns their actions (m, action_dim), float32 or
 /// float64; env i is seeded with seed + i (snake-rl's `evaluate::run_episodes_with`). `restart(i)`,
 /// where given, is called when env i's episode ends (an actor with a clock per env restarts it).
@@ -170,6 +173,7 @@ fn summarize<'py>(
             path_length: get(d, "path_length")?.extract()?,
             work: get(d, "work")?.extract()?,
             weight: get(d, "weight")?.extract()?,
+            physics: Default::default(),
         });
     }
     let s = evaluate::summarize(&parsed);

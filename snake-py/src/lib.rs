@@ -68,7 +68,10 @@ fn info_dict<'py>(py: Python<'py>, info: &Info) -> PyResult<Bound<'py, PyDict>> 
 }
 
 /// The physics an episode drew, under `randomize`'s keys (the given ones only).
-fn physics_dict<'py>(py: Python<'py>, physics: &Physics) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn physics_dict<'py>(
+    py: Python<'py>,
+    physics: &Physics,
+) -> PyResult<Bound<'py, PyDict>> {
     let p = PyDict::new(py);
     for (key, value) in physics.values() {
         if key == "latency_steps" {

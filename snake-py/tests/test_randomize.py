@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -121,6 +122,11 @@ def test_evaluate_under_a_distribution(tmp_path):
         "latency_steps": [0, 1],
     }
     assert report["episodes"] == 4
+    # Each episode's draws, to tell which physics cost a failure.
+    for episode in report["per_episode"]:
+        physics = episode["physics"]
+        assert list(physics) == ["ground_friction", "mass_scale", "latency_steps"]
+        assert 0.25 <= physics["ground_friction"] <= 1.0 and physics["latency_steps"] in (0, 1)
     bad = tmp_path / "bad.yaml"
     bad.write_text("mass_scale: [1.2, 0.8]\n")
     out = tmp_path / "out.json"
@@ -187,6 +193,36 @@ def test_the_vector_envs_report_each_episodes_physics():
         _, _, dones, step_infos = sb3.step_wait()
     assert dones.all() and all("physics" in info for info in step_infos)
     assert SnakeVectorEnv(2, task="goal", joints=5).reset(seed=1)[1] == {}
+
+
+def test_evaluation_lists_each_episodes_physics():
+    """``run_episodes`` (snakesim evaluate's episodes) gives each episode the physics its reset drew:
+    env i's first episode a single env's seeded ``s + i``, its second the draw of that env's
+    ``reset()`` after the first ran its course (the noise of its steps continues the same stream)."""
+    import gymnasium
+    from snakesim.agents.evaluation import run_episodes
+
+    kwargs = {"task": "goal", "joints": 5, "max_episode_steps": 4}
+    kwargs["randomize"] = {"mass_scale": [0.5, 1.5], "obs_noise": [0.0, 0.01]}
+    single = {k: v for k, v in kwargs.items() if k != "task"}
+    n = gymnasium.make("snakesim/SnakeGoal-v0", **single).action_space.shape[0]
+    zeros = lambda obs: np.zeros((len(obs), n), np.float32)  # noqa: E731
+    # 17 episodes over 16 envs: env 15 runs two, listed last.
+    done = run_episodes(zeros, kwargs, 17, 3)
+    expected = []
+    for i in range(16):
+        env = gymnasium.make("snakesim/SnakeGoal-v0", **single)
+        _, info = env.reset(seed=3 + i)
+        expected.append(info["physics"])
+    ended = False
+    while not ended:
+        _, _, terminated, truncated, _ = env.step(np.zeros(n, np.float32))
+        ended = terminated or truncated
+    expected.append(env.reset()[1]["physics"])
+    assert [e["physics"] for e in done] == expected
+    assert expected[16] != expected[15]
+    plain = {k: v for k, v in kwargs.items() if k != "randomize"}
+    assert all("physics" not in e for e in run_episodes(zeros, plain, 2, 3))
 
 
 # -- training under a distribution, end to end, with each trainer --------------------------------------
@@ -273,6 +309,12 @@ def test_training_under_a_distribution_end_to_end(trainer, tmp_path, capsys):
             assert load_agent(model).env_kwargs["randomize"] == DISTRIBUTION, model
     agent = load_agent(run)
     assert agent.env_kwargs["randomize"] == DISTRIBUTION
+    if trainer == "sb3":
+        # A zip copied out of its run keeps its distribution (the env keywords travel in the zip).
+        import shutil
+
+        bare = Path(shutil.copy(run / "model.zip", tmp_path / "bare.zip"))
+        assert load_agent(bare).env_kwargs["randomize"] == DISTRIBUTION
 
     # snakesim evaluate: under the model's own distribution, then under a file's.
     other = {"mass_scale": [0.5, 0.5], "latency_steps": [3, 3]}

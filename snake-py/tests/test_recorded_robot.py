@@ -143,6 +143,24 @@ def test_an_edited_robot_file_does_not_change_the_agent(kind, request, tmp_path,
     assert not np.array_equal(trajectory(edited), expected)
 
 
+def test_a_bare_sb3_zip_keeps_its_env_and_its_record(sb3_model, tmp_path, capsys, monkeypatch):
+    """The SB3 trainer's zip copied out of its run (no config.yaml beside): its env keywords and
+    robot record travel in the zip, so it loads on the robot it was trained on, not a guess."""
+    expected = trajectory(reference(tmp_path))
+    model = placed(sb3_model, tmp_path / "copy")
+    edit_robot(tmp_path / "copy")
+    monkeypatch.chdir(tmp_path / "copy")
+    capsys.readouterr()
+    agent = load_agent(model)
+    assert "the robot recorded in the model is used" in capsys.readouterr().err
+    assert {k: agent.env_kwargs[k] for k in ("task", "max_episode_steps", "joints")} == {
+        "task": "goal",
+        "max_episode_steps": 100,
+        "joints": 5,
+    }
+    np.testing.assert_array_equal(trajectory(agent.env_kwargs), expected)
+
+
 def test_a_missing_robot_file_is_replaced_by_the_record(native_model, tmp_path, capsys):
     model = placed(native_model, tmp_path / "copy")
     (tmp_path / "copy" / ROBOT).with_suffix(".urdf").unlink()

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha12Rng;
-use snake_core::{EnvConfig, StepBuffers, VecSnakeEnv};
+use snake_core::{EnvConfig, Physics, StepBuffers, VecSnakeEnv};
 
 use crate::policy::Policy;
 
@@ -36,6 +36,9 @@ pub struct Episode {
     pub work: f64,
     /// The snake's weight m g, newtons.
     pub weight: f64,
+    /// The physics the episode's reset drew ([`EnvConfig::randomize`]; empty without it), so that an
+    /// evaluation under a distribution can say which draws cost its failures.
+    pub physics: Physics,
 }
 
 impl Episode {
@@ -218,6 +221,9 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     };
     let mut out = StepBuffers::for_envs(&envs);
     envs.reset(Some(seed), &mut out.obs)?;
+    // The physics of each env's running episode (an env draws its next episode's when it resets).
+    let mut physics: Vec<Physics> = envs.envs().map(|e| *e.physics()).collect();
+    let mut ended = Vec::with_capacity(m);
     let step_seconds = config.snake.dt * f64::from(config.physics_steps_per_env_step);
     let mut actions = vec![A::default(); m * n];
     // The body's weight m g, for the cost of transport (the robot's links' masses for a robot).
@@ -230,7 +236,9 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
         }
         act(&out.obs, m, &mut actions)?;
         let finals = envs.step_into(&actions, &mut out)?;
+        ended.clear();
         for f in finals.iter() {
+            ended.push(f.env);
             restart(f.env)?;
             if counts[f.env] >= targets[f.env] {
                 continue;
@@ -253,9 +261,15 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
                     path_length: info.path_length,
                     work: info.work,
                     weight,
+                    physics: physics[f.env],
                 },
             ));
             counts[f.env] += 1;
+        }
+        for (i, env) in envs.envs().enumerate() {
+            if ended.contains(&i) {
+                physics[i] = *env.physics();
+            }
         }
     }
     // Episodes end in an order that depends on the policy; returned in the episodes' own order (env

@@ -19,8 +19,9 @@ def run_episodes(
     1's, ...), not the order they end in, so two policies' i-th episodes are one episode. Each is a
     dict: ``ret``, ``steps``, ``success``, ``seconds``, ``distance`` (m, start to end), ``path_length``
     (m), ``work`` (J), ``weight`` (N), ``speed`` (m/s), ``path_efficiency`` and ``cost_of_transport``
-    (None where undefined). ``restart(i)``, where given, hears that env i's episode ended (an actor
-    with a clock per env restarts it).
+    (None where undefined), and under ``randomize`` ``physics`` (the episode's draws).
+    ``restart(i)``, where given, hears that env i's episode ended (an actor with a clock per env
+    restarts it).
     """
     from snakesim import _core
     from snakesim.envs.config import action_array, env_config
@@ -47,5 +48,7 @@ def evaluate(agent: Agent, episodes: int, seed: int, deterministic: bool = True)
     )
     out = summarize(done)
     shown = ("steps", "success", "seconds", "speed", "path_efficiency", "cost_of_transport")
+    # Under `randomize`, each episode's draws ("physics"), to tell which physics cost its failures.
+    shown += ("physics",) if done and "physics" in done[0] else ()
     out["per_episode"] = [{"return": e["ret"], **{key: e[key] for key in shown}} for e in done]
     return out

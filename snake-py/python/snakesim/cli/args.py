@@ -102,7 +102,8 @@ def task_name(text: str) -> str:
 
 
 def baseline_env_options(p: argparse.ArgumentParser) -> None:
-    """The env a baseline runs in: a task, a robot, or exactly a model's env."""
+    """The env a baseline runs in: a task, a robot, or exactly a model's env (``--robot`` also puts
+    a model on another robot file)."""
     p.add_argument(
         "--env",
         type=task_name,
@@ -110,7 +111,12 @@ def baseline_env_options(p: argparse.ArgumentParser) -> None:
         help="for a baseline: the task, goal (default), paper, pegs or rough, or its Gymnasium id "
         "(snakesim/SnakePegs-v0)",
     )
-    p.add_argument("--robot", metavar="FILE", help="for a baseline: a robot file instead of the cube snake")
+    p.add_argument(
+        "--robot",
+        metavar="FILE",
+        help="a robot file: for a baseline instead of the cube snake; for a model in place of the robot "
+        "it records (e.g. an edited one; it must fit the model's observation and action sizes)",
+    )
     p.add_argument(
         "--env-from",
         metavar="MODEL",

@@ -35,6 +35,7 @@ from typing import Any
 from snakesim import _core, extras
 from snakesim.agents.evaluation import run_episodes, summarize
 from snakesim.agents.loading import (
+    EXPORTED_ENV_KEY,
     RECORDED_FILES_KEY,
     AgentError,
     inspect_model,
@@ -308,7 +309,9 @@ class Trainer:
 
         env_kwargs = runconfig.env_kwargs(self.config)
         venv = VecMonitor(SnakeVecEnv(self.config["n_envs"], **env_kwargs))
-        # The texts of the robot and world files the envs are built from, recorded in every zip saved.
+        # The env keywords (its `randomize` included) and the texts of the robot and world files the
+        # envs are built from, recorded in every zip saved, so a zip copied out of its run keeps them.
+        self.env_kwargs = env_kwargs
         self.env_files = env_file_records(env_kwargs)
         if not self.config["normalize"]:
             return venv
@@ -466,8 +469,10 @@ class Trainer:
         self.started = time.perf_counter()
         venv = self._make_env()
         self.model = self._make_model(venv)
+        # Plain JSON in the zip's data, as `snakesim export` writes them (PPO.load sets each as an
+        # attribute and ignores it; snakesim's loader reads them for a zip without its run directory).
+        setattr(self.model, EXPORTED_ENV_KEY, dict(self.env_kwargs))
         if self.env_files is not None:
-            # Plain JSON in the zip's data (PPO.load sets it as an attribute and ignores it).
             setattr(self.model, RECORDED_FILES_KEY, self.env_files)
         start_timesteps = self.model.num_timesteps
         self.last_eval_timesteps = -1
