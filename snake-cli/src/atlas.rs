@@ -156,15 +156,19 @@ pub fn atlas(args: &AtlasArgs) -> Result<()> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
+    // The output is checked against the robots first; its own previous text is read afterwards and
+    // is no input (the atlas replaces its generated part and keeps the rest). A world file named as
+    // the output is still refused: the grounds are read below, after this.
+    let md_file = OutputFile::new(&args.out, "atlas", &["md"])?;
     let existing = if args.out.exists() {
-        Some(
+        let text =
             snake_core::files::read_text(&args.out, snake_core::limits::MAX_CONFIG_BYTES, "atlas")
-                .map_err(|e| anyhow::anyhow!(e.message()))?,
-        )
+                .map_err(|e| anyhow::anyhow!(e.message()))?;
+        snake_core::files::forget_input(&args.out);
+        Some(text)
     } else {
         None
     };
-    let md_file = OutputFile::new(&args.out, "atlas", &["md"])?;
     std::fs::create_dir_all(&args.figures)
         .with_context(|| format!("cannot create {}", args.figures.display()))?;
 

@@ -72,6 +72,15 @@ fn remember_input(meta: &std::fs::Metadata) {
     }
 }
 
+/// Forgets that `path` (after links) was read as an input: for a command that rewrites its own
+/// output file after reading its previous text (`snake-cli atlas` keeps the rest of its Markdown).
+/// Call it only once the path has been checked against the real inputs.
+pub fn forget_input(path: &Path) {
+    if let (Ok(meta), Ok(mut inputs)) = (std::fs::metadata(path), INPUTS.lock()) {
+        inputs.remove(&version(&meta));
+    }
+}
+
 /// True when `path` is (after links) a file this process has read as an input.
 pub fn is_input(path: &Path) -> bool {
     let Ok(meta) = std::fs::metadata(path) else {
