@@ -30,7 +30,7 @@ pub use height_map::{
     HeightMap, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING, MAX_HEIGHT_MAP_SIDE,
     MAX_HEIGHT_MAP_SPACING,
 };
-pub use randomize::{Physics, Randomize, PHYSICS_STREAM};
+pub use randomize::{Physics, Randomize, NOISE_STREAM, PHYSICS_STREAM};
 pub use reward::{
     paper_distance, python_hypot, DistancePrecision, RewardConfig, RewardInputs, RewardTerms,
 };
@@ -269,6 +269,9 @@ pub struct SnakeEnv {
     structure: ObservationStructure,
     /// The physics stream ([`Randomize`]; the module `randomize` documents it), when randomizing.
     physics_rng: Option<ChaCha12Rng>,
+    /// The observation noise's stream, apart from the physics stream so that the physics of an
+    /// episode never depends on how many steps the episodes before it took.
+    noise_rng: Option<ChaCha12Rng>,
     /// The physics the latest reset drew (empty without [`EnvConfig::randomize`]).
     physics: Physics,
     /// The delay line of `latency_steps` actions (`action_dim` values each), oldest at `delay_head`.
@@ -322,6 +325,7 @@ impl SnakeEnv {
             progress_distance: 0.0,
             structure,
             physics_rng: None,
+            noise_rng: None,
             physics: Physics::default(),
             delay: Vec::new(),
             delay_head: 0,
@@ -434,6 +438,9 @@ impl SnakeEnv {
                 let mut physics = ChaCha12Rng::seed_from_u64(seed);
                 physics.set_stream(PHYSICS_STREAM);
                 self.physics_rng = Some(physics);
+                let mut noise = ChaCha12Rng::seed_from_u64(seed);
+                noise.set_stream(NOISE_STREAM);
+                self.noise_rng = Some(noise);
             }
         }
         // The physics stream, never the main one: the start, goal and terrain are the plain env's.
@@ -755,7 +762,8 @@ impl SnakeEnv {
     /// The observation noise of [`Randomize::obs_noise`] on the observation handed out (after the
     /// reward and the termination read the noiseless one); nothing without it.
     fn add_obs_noise(&mut self, obs: &mut [f32]) {
-        if let (Some(std), Some(rng)) = (self.physics.obs_noise, self.physics_rng.as_mut()) {
+        if let Some(std) = self.physics.obs_noise {
+            let rng = self.noise_rng.get_or_insert_with(ChaCha12Rng::from_entropy);
             randomize::add_noise(obs, std, rng);
         }
     }

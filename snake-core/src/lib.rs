@@ -64,7 +64,7 @@ pub use env::{
     GoalDistribution, Info, Layout, ObservationLayout, ObservationPart, ObservationStructure,
     PegField, Physics, Randomize, ResetOptions, RewardConfig, RewardTerms, Ridges, RoughGround,
     Segment, SnakeEnv, StartDistribution, StepOutcome, StepResult, Task, TerrainDistribution,
-    HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING,
+    HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING, NOISE_STREAM, PHYSICS_STREAM,
 };
 pub use error::{Error, Invalid, Result};
 pub use gait::{

@@ -139,6 +139,34 @@ fn same_seed_same_draw_different_seeds_differ_within_ranges() {
 }
 
 #[test]
+fn an_episodes_physics_never_depends_on_the_steps_before_it() {
+    // Two controllers evaluated on a seed's episodes must meet the same physics in each: the k-th
+    // reset's draw is the k-th draw of the physics stream, however long the episodes before were
+    // (the observation noise of their steps comes from a stream of its own).
+    use rand::SeedableRng;
+    let config = EnvConfig {
+        randomize: Some(wide()),
+        ..EnvConfig::for_task(Task::Goal, Preset::Paper, 4)
+    };
+    let mut stream = rand_chacha::ChaCha12Rng::seed_from_u64(5);
+    stream.set_stream(snake_core::PHYSICS_STREAM);
+    let expected: Vec<_> = (0..3).map(|_| wide().draw(&mut stream)).collect();
+    for steps in [1, 7, 60] {
+        let mut env = SnakeEnv::new(config.clone()).unwrap();
+        env.reset(Some(5), ResetOptions::default()).unwrap();
+        let mut drawn = vec![*env.physics()];
+        for _ in 0..2 {
+            for t in 0..steps {
+                env.step(&action(t, env.action_dim())).unwrap();
+            }
+            env.reset(None, ResetOptions::default()).unwrap();
+            drawn.push(*env.physics());
+        }
+        assert_eq!(drawn, expected, "episodes of {steps} steps");
+    }
+}
+
+#[test]
 fn mass_and_ground_friction_reach_the_world() {
     for robot in [None, Some(RobotRef::load(&robot_path()).unwrap())] {
         let base = EnvConfig {

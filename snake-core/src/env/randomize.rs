@@ -7,8 +7,11 @@
 //! Every reset draws from the env's *physics stream*, never from its main stream, so the start, the
 //! goal and the terrain of a seed are those of the plain env: `reset(Some(seed))` seeds it as
 //! `ChaCha12Rng::seed_from_u64(seed)` moved to stream [`PHYSICS_STREAM`] (`set_stream`: the same key,
-//! another of ChaCha's 2^64 independent streams); `reset(None)` continues it. The same seed therefore
-//! draws the same physics, and the observation noise of its steps continues the same stream.
+//! another of ChaCha's 2^64 independent streams); `reset(None)` continues it. The observation noise
+//! of the steps comes from a third stream, [`NOISE_STREAM`], seeded and continued alike, so that the
+//! physics stream is read at resets only: the same seed draws the same physics for its first
+//! episode and for every later one, however many steps the episodes before took (two controllers
+//! evaluated on a seed's episodes meet the same physics in each).
 //!
 //! Each configured key takes one uniform number `u` in [0, 1) in the order of [`Randomize`]'s fields,
 //! and the value is `low + (high - low) * u` (`latency_steps`: `low + floor(u * (high - low + 1))`);
@@ -25,6 +28,9 @@ use crate::Body;
 /// The physics stream's number: "RANDOMIZ" in ASCII. Any value other than the main stream's (0) would
 /// do; this one is fixed so that a seed's draws never change.
 pub const PHYSICS_STREAM: u64 = 0x5241_4e44_4f4d_495a;
+
+/// The observation noise's stream: "OBSNOISE" in ASCII, fixed for the same reason.
+pub const NOISE_STREAM: u64 = 0x4f42_534e_4f49_5345;
 
 /// Ranges `[low, high]` of the physics drawn at every reset (the env keyword `randomize`); a key left
 /// out is not randomized (nominal physics). Drawn in this order, one number per given key.
