@@ -61,17 +61,17 @@ def native_model(tmp_path_factory):
     return train(tmp_path_factory.mktemp("recorded-native"), {"trainer": "native", "threads": 1})
 
 
+SB3 = {
+    "trainer": "sb3",
+    "device": "cpu",
+    "torch_threads": 1,
+    "ppo": {"n_steps": 128, "batch_size": 128, "n_epochs": 1},
+}
+
+
 @pytest.fixture(scope="module")
 def sb3_model(tmp_path_factory):
-    return train(
-        tmp_path_factory.mktemp("recorded-sb3"),
-        {
-            "trainer": "sb3",
-            "device": "cpu",
-            "torch_threads": 1,
-            "ppo": {"n_steps": 128, "batch_size": 128, "n_epochs": 1},
-        },
-    )
+    return train(tmp_path_factory.mktemp("recorded-sb3"), SB3)
 
 
 def placed(model: Path, where: Path) -> Path:
@@ -159,6 +159,37 @@ def test_a_bare_sb3_zip_keeps_its_env_and_its_record(sb3_model, tmp_path, capsys
         "joints": 5,
     }
     np.testing.assert_array_equal(trajectory(agent.env_kwargs), expected)
+
+
+@pytest.mark.parametrize("kind", ["native", "sb3"])
+def test_a_resumed_run_goes_on_with_the_robot_it_trained_on(kind, tmp_path, capsys, monkeypatch):
+    """The robot file edited between a run and its --resume: the run goes on with the recorded robot
+    (one note), and its final model records and acts on the robot as first trained."""
+    trainer = {"trainer": "native", "threads": 1} if kind == "native" else SB3
+    base = tmp_path / "run-base"
+    copy_robot(base)
+    (base / "config.yaml").write_text(yaml.safe_dump({**TINY, **trainer, "checkpoint_freq": 256}))
+    monkeypatch.chdir(base)
+    assert cli.main(["train", "--config", "config.yaml", "--run-dir", "run", "--no-progress"]) == 0
+    edit_robot(base)
+    capsys.readouterr()
+    argv = ["train", "--run-dir", "run", "--resume", "--timesteps", "512", "--no-progress"]
+    assert cli.main(argv) == 0, capsys.readouterr().err
+    notes = [line for line in capsys.readouterr().err.splitlines() if "changed since training" in line]
+    assert len(notes) == 1, notes
+    assert f"robot {ROBOT} changed since training" in notes[0]
+    model = base / "run" / ("model.safetensors" if kind == "native" else "model.zip")
+    expected = {
+        f"{NAME}.{suffix}": (REPO / "robots" / f"{NAME}.{suffix}").read_text() for suffix in ("yaml", "urdf")
+    }
+    if kind == "native":
+        record = json.loads(header(model)["__metadata__"]["env_files"])
+    else:
+        with zipfile.ZipFile(model) as archive:
+            record = json.loads(archive.read("data"))[loading.RECORDED_FILES_KEY]
+    assert record["robot"]["files"] == expected
+    agent = load_agent(model)
+    np.testing.assert_array_equal(trajectory(agent.env_kwargs), trajectory(reference(tmp_path)))
 
 
 def test_a_missing_robot_file_is_replaced_by_the_record(native_model, tmp_path, capsys):

@@ -793,10 +793,21 @@ pub fn parse_policy(path: &Path, bytes: &[u8]) -> Result<SavedPolicy, ModelError
     Parsed::new(path, bytes)?.policy().map(|(policy, _)| policy)
 }
 
+/// [`load_checkpoint`], and what the user should be told about it (as [`load_policy_noted`]): a
+/// note means its robot or world file changed since it was written, and its env keywords hold the
+/// record in place of that path.
+pub fn load_checkpoint_noted(path: &Path) -> Result<(Checkpoint, Vec<String>), ModelError> {
+    checkpoint_noted(path, &read(path)?)
+}
+
 /// A checkpoint from a file's bytes, as [`parse_policy`].
 pub fn parse_checkpoint(path: &Path, bytes: &[u8]) -> Result<Checkpoint, ModelError> {
+    checkpoint_noted(path, bytes).map(|(checkpoint, _)| checkpoint)
+}
+
+fn checkpoint_noted(path: &Path, bytes: &[u8]) -> Result<(Checkpoint, Vec<String>), ModelError> {
     let p = Parsed::new(path, bytes)?;
-    let (policy, _) = p.policy()?;
+    let (policy, notes) = p.policy()?;
     let n = policy.net.len();
     let mut adam = Adam::new(n);
     adam.exp_avg = p.f32s("adam.exp_avg", n)?;
@@ -818,7 +829,7 @@ pub fn parse_checkpoint(path: &Path, bytes: &[u8]) -> Result<Checkpoint, ModelEr
     };
     let rng: ChaCha12Rng = serde_json::from_str(p.meta("rng")?)
         .map_err(|e| p.error(format!("metadata 'rng' is not a generator state ({e})")))?;
-    Ok(Checkpoint {
+    let checkpoint = Checkpoint {
         adam,
         normalizer,
         rng,
@@ -827,7 +838,8 @@ pub fn parse_checkpoint(path: &Path, bytes: &[u8]) -> Result<Checkpoint, ModelEr
         reason: p.meta("reason")?.to_owned(),
         init_pending: p.meta.get("init").is_some_and(|v| v == "pending"),
         policy,
-    })
+    };
+    Ok((checkpoint, notes))
 }
 
 #[cfg(test)]

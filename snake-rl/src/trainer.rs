@@ -243,7 +243,13 @@ pub struct ResumePoint {
     pub path: PathBuf,
     /// One line for each newer checkpoint that was skipped: its file and why it cannot be used.
     pub skipped: Vec<String>,
+    /// One line for each robot or world file that changed since the checkpoint was written: the run
+    /// resumes on the files it records, as a loaded model does (`<checkpoint>: robot R changed since
+    /// training (...); the robot recorded in the model is used`).
+    pub notes: Vec<String>,
     checkpoint: Checkpoint,
+    /// The checkpoint's env keywords hold a record in place of a changed file's path.
+    recorded_env: bool,
 }
 
 fn check_native(config: &RunConfig) -> Result<(), TrainError> {
@@ -302,8 +308,8 @@ pub fn prepare(
     }
     let mut skipped = Vec::new();
     for (steps, path) in found.into_iter().rev() {
-        match model::load_checkpoint(&path) {
-            Ok(checkpoint) if checkpoint.policy.timesteps == steps => {
+        match model::load_checkpoint_noted(&path) {
+            Ok((checkpoint, notes)) if checkpoint.policy.timesteps == steps => {
                 if steps >= config.timesteps {
                     return Err(TrainError::Setup(format!(
                         "{} already has {steps} timesteps (>= timesteps {}); pass a larger \
@@ -318,11 +324,13 @@ pub fn prepare(
                         timesteps: steps,
                         path,
                         skipped,
+                        recorded_env: !notes.is_empty(),
+                        notes: notes.into_iter().map(|n| n.replace('\n', " ")).collect(),
                         checkpoint,
                     }),
                 });
             }
-            Ok(checkpoint) => skipped.push(format!(
+            Ok((checkpoint, _)) => skipped.push(format!(
                 "skipped a checkpoint: {} holds {} timesteps, not the {steps} its name says",
                 path.display(),
                 checkpoint.policy.timesteps
@@ -373,13 +381,18 @@ pub fn train_prepared(
     let mut versions = native_versions();
     versions.extend(session.versions.clone());
     let (dir, checkpoint) = if let Some(point) = resume {
-        for line in &point.skipped {
+        for line in point.skipped.iter().chain(&point.notes) {
             observer.on_note(line);
         }
         let (dir, _) = RunDir::open(&session.run_dir).map_err(|e| TrainError::Setup(e.0))?;
         dir.keep_evaluations_up_to(point.timesteps)?;
         dir.note_resume_versions(point.timesteps, &versions)?;
-        (dir, Some(point.checkpoint))
+        // A file changed since the checkpoint: the run goes on with the robot and world it trained
+        // on (the checkpoint's env keywords, the record in place of that path).
+        let env = point
+            .recorded_env
+            .then(|| point.checkpoint.policy.env.env.clone());
+        (dir, Some((point.checkpoint, env)))
     } else {
         (RunDir::create(lock, &config, &versions)?, None)
     };
@@ -393,6 +406,10 @@ pub fn train_prepared(
 struct Run {
     config: RunConfig,
     env_config: EnvConfig,
+    /// The env keywords `env_config` was built from.
+    env: Map<String, Value>,
+    /// The texts of its robot and world files as this session read them ([`model::env_files`]).
+    env_files: Option<Value>,
     /// The run's `steer_assist`, bound to its env: between the policy and the envs.
     assist: Option<AssistedEnv>,
     dir: RunDir,
@@ -429,9 +446,19 @@ impl Run {
         config: RunConfig,
         dir: RunDir,
         threads: usize,
-        checkpoint: Option<Checkpoint>,
+        checkpoint: Option<(Checkpoint, Option<Map<String, Value>>)>,
     ) -> Result<Self, TrainError> {
-        let env_config = config.env_config().map_err(|e| TrainError::Setup(e.0))?;
+        // The env keywords: the configuration's, or a resumed checkpoint's where it records files
+        // that changed since (see `ResumePoint::notes`).
+        let (checkpoint, env) = match checkpoint {
+            Some((c, Some(env))) => (Some(c), env),
+            other => (other.map(|(c, _)| c), config.env.clone()),
+        };
+        let env_config = crate::config::env_config(config.joints, config.preset, &env, "env")
+            .map_err(|e| TrainError::Setup(e.0))?;
+        // The robot and world files as read now, recorded in every model and checkpoint this session
+        // writes, even if a file is edited while it trains.
+        let env_files = model::env_files(&env_config);
         let assist = match config.steer_assist {
             None => None,
             Some(a) => Some(
@@ -511,6 +538,8 @@ impl Run {
         };
         Ok(Run {
             env_config,
+            env,
+            env_files,
             assist,
             dir,
             threads,
@@ -549,11 +578,22 @@ impl Run {
             env: EnvSpec {
                 joints: self.config.joints,
                 preset: self.config.preset,
-                env: self.config.env.clone(),
+                env: self.recorded_env(),
             },
             steer_assist: self.config.steer_assist,
             timesteps: self.timesteps,
         }
+    }
+
+    /// The env keywords a saved model gets: the session's, with the record in place of a robot or
+    /// world file edited since the session read it (the model then records what it trained on, not
+    /// the edit; `apply_env_files` on the session's own record cannot fail but is kept quiet if so).
+    fn recorded_env(&self) -> Map<String, Value> {
+        let mut env = self.env.clone();
+        if let Some(records) = &self.env_files {
+            let _ = model::apply_env_files(&mut env, records);
+        }
+        env
     }
 
     fn save_checkpoint(&self, reason: &str) -> Result<PathBuf, TrainError> {

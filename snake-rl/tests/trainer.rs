@@ -377,3 +377,55 @@ fn energy_ramp_controls_the_training_reward() {
         "the energy term without a ramp changes the run"
     );
 }
+
+/// Edits the robot file at the first evaluation, halfway through the run.
+struct EditAtEvaluation(PathBuf);
+
+impl Observer for EditAtEvaluation {
+    fn on_evaluation(&mut self, _row: &snake_rl::rundir::EvaluationRow) {
+        let text = std::fs::read_to_string(&self.0).unwrap();
+        std::fs::write(&self.0, text.replace("kp: 0.1,", "kp: 0.4,")).unwrap();
+    }
+    fn on_note(&mut self, _message: &str) {}
+}
+
+#[test]
+fn a_robot_file_edited_while_a_run_trains_is_not_what_its_models_record() {
+    let dir = scratch("edited-robot");
+    let bots = dir.with_extension("bots");
+    std::fs::create_dir_all(&bots).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots");
+    let mut original = Map::new();
+    for name in ["paper-cubes-5.yaml", "paper-cubes-5.urdf"] {
+        let text = std::fs::read_to_string(shipped.join(name)).unwrap();
+        std::fs::write(bots.join(name), &text).unwrap();
+        original.insert(name.into(), Value::String(text));
+    }
+    let robot = bots.join("paper-cubes-5.yaml");
+    let config = tiny(json!({"joints": 5, "env": {"robot": robot.to_str().unwrap()}}));
+    let mut observer = EditAtEvaluation(robot.clone());
+    finished(trainer::train(&session(config, &dir, false), &mut observer).unwrap());
+    assert!(std::fs::read_to_string(&robot)
+        .unwrap()
+        .contains("kp: 0.4,"));
+    for file in [
+        dir.join("model.safetensors"),
+        dir.join("checkpoints/model_2048_steps.safetensors"),
+    ] {
+        let bytes = std::fs::read(&file).unwrap();
+        let (_, meta) = safetensors::SafeTensors::read_metadata(&bytes).unwrap();
+        let meta = meta.metadata().clone().unwrap();
+        let record: Value = serde_json::from_str(&meta["env_files"]).unwrap();
+        assert_eq!(
+            record["robot"]["files"],
+            Value::Object(original.clone()),
+            "{file:?}"
+        );
+        // Loaded, it acts on the robot as trained: its env keyword is the record itself.
+        let (policy, notes) = model::load_policy_noted(&file).unwrap();
+        assert!(policy.env.env["robot"].is_object(), "{file:?}");
+        assert!(notes.is_empty(), "already a record: {notes:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::remove_dir_all(&bots).ok();
+}

@@ -313,6 +313,12 @@ def load_agent(
     return _read_sb3(located, joints, preset, env_overrides, device)
 
 
+def recorded_env_files(model: str | os.PathLike) -> Any:
+    """The robot and world files an SB3 zip records (``snakesim_env_files``), or None; read as plain
+    JSON, nothing unpickled. AgentError when the file is not an SB3 model."""
+    return _read_zip(Path(model)).data.get(RECORDED_FILES_KEY)
+
+
 def env_kwargs_of(source: str | os.PathLike) -> dict[str, Any]:
     """The env keywords recorded in a model's metadata or a run directory (what :func:`load_agent`
     would evaluate the agent on), for running a baseline on exactly that env."""

@@ -40,6 +40,7 @@ from snakesim.agents.loading import (
     AgentError,
     inspect_model,
     load_normalizer,
+    recorded_env_files,
     safe_custom_objects,
 )
 from snakesim.envs.config import env_file_records
@@ -302,12 +303,31 @@ class Trainer:
         return self.wall_offset + (time.perf_counter() - self.started)
 
     # -- model -------------------------------------------------------------------------------------
+    def _resumed_env(self, env_kwargs: dict[str, Any], checkpoint: Path) -> dict[str, Any]:
+        """The env keywords a resumed run goes on with: the configuration's, with the record of the
+        checkpoint in place of a robot or world file that changed since it was written (one note
+        each), so that the run goes on with the robot it trained on, as a loaded model acts on it."""
+        from snakesim.envs.config import apply_env_files
+
+        records = recorded_env_files(checkpoint)
+        if records is None:
+            return env_kwargs
+        try:
+            env_kwargs, notes = apply_env_files(env_kwargs, records)
+        except (TypeError, ValueError) as error:
+            raise RunDirError(f"{checkpoint}: {error}") from None
+        for line in notes:
+            self.log(f"note: {checkpoint}: {line}")
+        return env_kwargs
+
     def _make_env(self):
         from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
         from snakesim.envs.sb3 import SnakeVecEnv
 
         env_kwargs = runconfig.env_kwargs(self.config)
+        if self.resume_from is not None:
+            env_kwargs = self._resumed_env(env_kwargs, self.resume_from[1])
         venv = VecMonitor(SnakeVecEnv(self.config["n_envs"], **env_kwargs))
         # The env keywords (its `randomize` included) and the texts of the robot and world files the
         # envs are built from, recorded in every zip saved, so a zip copied out of its run keeps them.
