@@ -288,11 +288,11 @@ fn atlas_rewrites_its_own_markdown_and_no_input() {
     .unwrap();
     let cubes = robot("paper-cubes-5.yaml");
     let figures = dir.join("figures");
-    let atlas = |out: &str| {
+    let atlas = |robot: &str, out: &str| {
         snake_cli(&[
             "atlas",
             "--robot",
-            &cubes,
+            robot,
             "--gait",
             "sine",
             "--ground",
@@ -308,7 +308,7 @@ fn atlas_rewrites_its_own_markdown_and_no_input() {
         ])
     };
     // The documented `snake-cli atlas` updates an existing file in place.
-    let out = atlas(md.to_str().unwrap());
+    let out = atlas(&cubes, md.to_str().unwrap());
     assert!(
         out.status.success(),
         "{}",
@@ -331,21 +331,7 @@ fn atlas_rewrites_its_own_markdown_and_no_input() {
     let link = dir.join("robot.md");
     std::os::unix::fs::symlink(&copy, &link).unwrap();
     let before = std::fs::read(&copy).unwrap();
-    let out = snake_cli(&[
-        "atlas",
-        "--robot",
-        copy.to_str().unwrap(),
-        "--gait",
-        "sine",
-        "--ground",
-        "plane",
-        "--cycles",
-        "1",
-        "--out",
-        link.to_str().unwrap(),
-        "--figures",
-        figures.to_str().unwrap(),
-    ]);
+    let out = atlas(copy.to_str().unwrap(), link.to_str().unwrap());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         !out.status.success() && err.contains("one of this run's inputs"),
