@@ -36,10 +36,11 @@ fn episode_dict<'py>(py: Python<'py>, e: &Episode) -> PyResult<Bound<'py, PyDict
 
 /// run_episodes(config_json, episodes, seed, act) -> list of episode dicts (ret, steps, success,
 /// seconds, distance, path_length, work, weight, and the derived speed, path_efficiency and
-/// cost_of_transport, None where undefined; under `randomize`, physics: the episode's draws). `act(obs)` gets the observations of the envs that run
-/// at once, float32 of shape (m, observation_dim), and returns their actions (m, action_dim), float32 or
-/// float64; env i is seeded with seed + i (snake-rl's `evaluate::run_episodes_with`). `restart(i)`,
-/// where given, is called when env i's episode ends (an actor with a clock per env restarts it).
+/// cost_of_transport, None where undefined; under `randomize`, physics: the episode's draws).
+/// `act(obs)` gets the observations of the envs that run at once, float32 of shape (m,
+/// observation_dim), and returns their actions (m, action_dim), float32 or float64; env i is seeded
+/// with seed + i (snake-rl's `evaluate::run_episodes_with`). `restart(i)`, where given, is called
+/// when env i's episode ends (an actor with a clock per env restarts it).
 #[pyfunction]
 #[pyo3(signature = (config_json, episodes, seed, act, restart=None))]
 fn run_episodes<'py>(
