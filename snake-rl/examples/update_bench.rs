@@ -3,7 +3,8 @@
 //!
 //! First one minibatch update (forward, loss, backward, gradient clipping, Adam), split into its
 //! parts, on one thread; then a whole update of the paper's settings (10 epochs over a rollout of
-//! 16 envs x 4096 steps in minibatches of 64) on 1 and 2 threads.
+//! 16 envs x 4096 steps in minibatches of 64) on 1 and 2 threads, and on 2 threads again with
+//! `init.anchor`'s term in the loss (weight 1000, anchor actions stored with the rollout).
 
 use std::time::Instant;
 
@@ -98,13 +99,23 @@ fn main() {
     }
 }
 
-/// One full update of the paper's settings over a random rollout, on `threads` threads; seconds.
-fn full_update(arch: Arch, obs_dim: usize, act_dim: usize, threads: usize) -> f64 {
+/// One full update of the paper's settings over a random rollout, on `threads` threads, with an
+/// anchor term of `anchor_weight` when it is not 0; seconds.
+fn full_update(
+    arch: Arch,
+    obs_dim: usize,
+    act_dim: usize,
+    threads: usize,
+    anchor_weight: f32,
+) -> f64 {
     let (n_steps, n_envs) = (4096, 16);
     let net = ActorCritic::new(arch.clone(), obs_dim, act_dim);
     let mut rng = rand_chacha::ChaCha12Rng::seed_from_u64(1);
     let params = init_params(&net, &mut rng);
     let mut buffer = RolloutBuffer::new(n_steps, n_envs, obs_dim, act_dim);
+    if anchor_weight != 0.0 {
+        buffer = buffer.with_anchors();
+    }
     for _ in 0..n_steps {
         let obs: Vec<f32> = (0..n_envs * obs_dim)
             .map(|_| rng.gen_range(-1.0..1.0))
@@ -114,6 +125,12 @@ fn full_update(arch: Arch, obs_dim: usize, act_dim: usize, threads: usize) -> f6
             .collect();
         let r: Vec<f32> = (0..n_envs).map(|_| rng.gen_range(-1.0..0.0)).collect();
         let lp: Vec<f32> = (0..n_envs).map(|_| rng.gen_range(-6.0..-4.0)).collect();
+        if anchor_weight != 0.0 {
+            let anchors: Vec<f32> = (0..n_envs * act_dim)
+                .map(|_| rng.gen_range(-1.0..1.0))
+                .collect();
+            buffer.set_anchors(&anchors);
+        }
         buffer.add(&obs, &act, &r, &vec![false; n_envs], &r, &lp);
     }
     buffer.compute_returns_and_advantage(&vec![0.0; n_envs], &vec![false; n_envs], 0.99, 0.95);
@@ -126,7 +143,7 @@ fn full_update(arch: Arch, obs_dim: usize, act_dim: usize, threads: usize) -> f6
             ent_coef: 0.0,
             vf_coef: 0.5,
             normalize_advantage: true,
-            anchor_weight: 0.0,
+            anchor_weight,
         },
         max_grad_norm: 0.5,
         target_kl: None,
@@ -150,11 +167,12 @@ fn full_updates() {
         (Arch::Large, 12, 5),
         (Arch::Small, 22, 10),
     ] {
-        let t1 = full_update(arch.clone(), obs_dim, act_dim, 1);
-        let t2 = full_update(arch.clone(), obs_dim, act_dim, 2);
+        let t1 = full_update(arch.clone(), obs_dim, act_dim, 1, 0.0);
+        let t2 = full_update(arch.clone(), obs_dim, act_dim, 2, 0.0);
+        let anchored = full_update(arch.clone(), obs_dim, act_dim, 2, 1000.0);
         println!(
             "{arch:5} obs {obs_dim:2} act {act_dim:2}: full update (10,240 minibatches) {t1:.2} s on 1 thread, {t2:.2} s on 2 \
-             ({:.1} / {:.1} us per minibatch)",
+             ({:.1} / {:.1} us per minibatch); anchored, 2 threads: {anchored:.2} s",
             t1 / 10240.0 * 1e6,
             t2 / 10240.0 * 1e6
         );
