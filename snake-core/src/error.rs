@@ -158,6 +158,7 @@ pub const MAX_ERROR_CHARS: usize = 600;
 /// `message` cut in its middle to at most `MAX_ERROR_CHARS` characters (the Python CLI cuts its
 /// lines with this too, through `snakesim._core.capped_message`).
 pub fn capped(message: String) -> String {
+    let message = short_numbers(message);
     let count = message.chars().count();
     if count <= MAX_ERROR_CHARS {
         return message;
@@ -168,4 +169,65 @@ pub fn capped(message: String) -> String {
     let start: String = message.chars().take(head).collect();
     let end: String = message.chars().skip(count - tail).collect();
     format!("{start}{CUT}{end}")
+}
+
+/// Most digits of a number written out in a message: Rust's `{}` writes 1e300 with 301 digits and
+/// 1e-300 with 300 zeros, which a message would then cut in the middle of.
+const MAX_NUMBER_DIGITS: usize = 20;
+
+/// `message` with every number of more than [`MAX_NUMBER_DIGITS`] digits written short, as
+/// [`crate::limits::short`] writes it (`1e300`, `1e-300`): the rule for every error line, so that no
+/// message needs to remember it.
+fn short_numbers(message: String) -> String {
+    let bytes = message.as_bytes();
+    let digits_from = |i: usize| bytes[i..].iter().take_while(|b| b.is_ascii_digit()).count();
+    let mut out = String::with_capacity(message.len());
+    let mut copied = 0;
+    let mut i = 0;
+    while i < bytes.len() {
+        let starts_number = bytes[i].is_ascii_digit() && (i == 0 || !bytes[i - 1].is_ascii_digit());
+        if !starts_number {
+            i += 1;
+            continue;
+        }
+        let whole = digits_from(i);
+        let mut end = i + whole;
+        let mut count = whole;
+        if end + 1 < bytes.len() && bytes[end] == b'.' && bytes[end + 1].is_ascii_digit() {
+            let fraction = digits_from(end + 1);
+            count += fraction;
+            end += 1 + fraction;
+        }
+        if count > MAX_NUMBER_DIGITS {
+            if let Ok(x) = message[i..end].parse::<f64>() {
+                out.push_str(&message[copied..i]);
+                out.push_str(&crate::limits::short(x));
+                copied = end;
+            }
+        }
+        i = end;
+    }
+    if copied == 0 {
+        return message;
+    }
+    out.push_str(&message[copied..]);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_numbers_are_written_short_and_others_kept() {
+        let huge = format!("must be in [0, 100], got {}", 1e300);
+        assert_eq!(capped(huge), "must be in [0, 100], got 1e300");
+        let tiny = format!("got {} and -{}", 1e-300, 2.5e-250);
+        assert_eq!(capped(tiny), "got 1e-300 and -2.5e-250");
+        let plain = "step 864001 of 864000, 0.0041666666666666666 s, v1.2.3".to_owned();
+        assert_eq!(capped(plain.clone()), plain);
+        // A number cut by the cap would be unreadable: it is short before the cap.
+        let long = format!("{}{}", "x".repeat(590), 1e300);
+        assert!(capped(long).ends_with("1e300"));
+    }
 }

@@ -72,6 +72,15 @@ fn remember_input(meta: &std::fs::Metadata) {
     }
 }
 
+/// Remembers `path` (after links) as an input of this process: for a reader outside this crate (the
+/// Python package's reads of models, statistics and configurations), so that one set holds every file
+/// the process reads, whichever language read it. A path that names nothing is ignored.
+pub fn remember_input_path(path: &Path) {
+    if let Ok(meta) = std::fs::metadata(path) {
+        remember_input(&meta);
+    }
+}
+
 /// Forgets that `path` (after links) was read as an input: for a command that rewrites its own
 /// output file after reading its previous text (`snake-cli atlas` keeps the rest of its Markdown).
 /// Call it only once the path has been checked against the real inputs.
@@ -249,12 +258,26 @@ pub fn check_xml_shape(text: &str, shown: &str) -> Result<()> {
 const EXCERPT_CHARS: usize = 24;
 
 /// A short, escaped excerpt of a user's value for an error message: at most 24 characters, quoted,
-/// control characters escaped, an ellipsis where it was cut.
+/// control characters escaped, an ellipsis where it was cut; and only of a value that reads as a name
+/// or a number ([`is_name_like`]): anything else is named by its length alone. A file that is not
+/// ours (a password file handed to `--world` or `--targets`, or named by a hostile model) puts its
+/// lines where keys and values are expected, and a line with `$`, `:` or `*` in it is never quoted,
+/// not even in part.
 pub fn excerpt(value: &str) -> String {
+    if !is_name_like(value) {
+        return format!("<{} characters, not shown>", value.chars().count());
+    }
     let mut chars = value.chars();
     let head: String = chars.by_ref().take(EXCERPT_CHARS).collect();
     let cut = if chars.next().is_some() { "..." } else { "" };
     format!("{head:?}{cut}")
+}
+
+/// True for text made of letters, digits, spaces and `_ . , + - /` only: a key, a joint name, a
+/// number or a path, as a user writes them.
+pub fn is_name_like(text: &str) -> bool {
+    text.chars()
+        .all(|c| c.is_alphanumeric() || " _.,+-/".contains(c))
 }
 
 /// A YAML parser's error as one line that names the file and the place but quotes no more of the
@@ -279,8 +302,96 @@ pub fn yaml_error(shown: &str, what: &str, error: &serde_norway::Error) -> crate
     invalid(format!("{shown}: {}{at}", quoted_excerpts(message)))
 }
 
-/// `message` with every double-quoted or backquoted part cut to an [`excerpt`].
-fn quoted_excerpts(message: &str) -> String {
+/// The first number of a parsed YAML document that is not finite (`.nan`, `.inf`, `-.inf`; a literal
+/// too large for a double, `1e999`, is a string to YAML), as an error naming its key path
+/// (`randomize.mass_scale[0]`)
+/// under `prefix` (a file name or a key; empty for none). serde turns a non-finite number into a
+/// JSON `null`, which reads as "not given": a setting would be silently dropped, so every YAML reader
+/// refuses them here, optional keys included.
+pub fn check_finite_yaml(value: &serde_norway::Value, prefix: &str) -> Result<()> {
+    fn walk(value: &serde_norway::Value, path: &mut String) -> Option<(String, f64)> {
+        use serde_norway::Value as Y;
+        match value {
+            Y::Number(n) => n
+                .as_f64()
+                .filter(|x| !x.is_finite())
+                .map(|x| (path.clone(), x)),
+            Y::Sequence(items) => items.iter().enumerate().find_map(|(k, item)| {
+                let len = path.len();
+                path.push_str(&format!("[{k}]"));
+                let found = walk(item, path);
+                path.truncate(len);
+                found
+            }),
+            Y::Mapping(map) => map.iter().find_map(|(key, item)| {
+                let len = path.len();
+                let name = match key {
+                    Y::String(s) => s.clone(),
+                    Y::Number(n) => n.to_string(),
+                    Y::Bool(b) => b.to_string(),
+                    _ => "?".to_owned(),
+                };
+                if !path.is_empty() {
+                    path.push('.');
+                }
+                path.push_str(&withheld_unless_name(&name));
+                let found = walk(item, path);
+                path.truncate(len);
+                found
+            }),
+            Y::Tagged(tagged) => walk(&tagged.value, path),
+            Y::Null | Y::Bool(_) | Y::String(_) => None,
+        }
+    }
+    let mut path = String::new();
+    match walk(value, &mut path) {
+        None => Ok(()),
+        Some((key, x)) => {
+            let yaml = if x.is_nan() {
+                ".nan"
+            } else if x > 0.0 {
+                ".inf"
+            } else {
+                "-.inf"
+            };
+            let detail =
+                format!("must be a finite number, got {yaml} (non-finite numbers are refused)");
+            Err(match (prefix.is_empty(), key.is_empty()) {
+                (true, true) => invalid(detail),
+                (true, false) => crate::error::invalid_at(key, detail),
+                (false, true) => crate::error::invalid_at(prefix, detail),
+                (false, false) => crate::error::invalid_at(format!("{prefix}: {key}"), detail),
+            })
+        }
+    }
+}
+
+/// Parses YAML text (the shape already checked) into `T` as serde does, after refusing a non-finite
+/// number anywhere in it ([`check_finite_yaml`]); errors as [`yaml_error`] gives them, `what` naming
+/// the expected content (e.g. "a world file").
+pub fn from_yaml<T: serde::de::DeserializeOwned>(text: &str, shown: &str, what: &str) -> Result<T> {
+    let parsed: T = serde_norway::from_str(text).map_err(|e| yaml_error(shown, what, &e))?;
+    // Parsed again as a plain value only to find non-finite numbers: serde has already said the
+    // text is valid, so this cannot fail on syntax.
+    let value: serde_norway::Value =
+        serde_norway::from_str(text).map_err(|e| yaml_error(shown, what, &e))?;
+    check_finite_yaml(&value, shown)?;
+    Ok(parsed)
+}
+
+/// A key for an error message's key path: itself when it is a short name ([`is_name_like`], at most
+/// [`EXCERPT_CHARS`] characters), an [`excerpt`] otherwise.
+pub fn withheld_unless_name(text: &str) -> String {
+    if is_name_like(text) && text.chars().count() <= EXCERPT_CHARS {
+        text.to_owned()
+    } else {
+        excerpt(text)
+    }
+}
+
+/// `message` with every double-quoted or backquoted part cut to an [`excerpt`], or withheld where it
+/// does not read as a name ([`withheld_unless_name`]): serde's messages quote keys and values whole.
+pub fn quoted_excerpts(message: &str) -> String {
     let mut out = String::new();
     let mut rest = message;
     while let Some(open) = rest.find(['"', '`']) {
@@ -305,7 +416,7 @@ fn quoted_excerpts(message: &str) -> String {
             return out;
         };
         let inner = &after[..end];
-        if inner.chars().count() > EXCERPT_CHARS {
+        if !is_name_like(inner) || inner.chars().count() > EXCERPT_CHARS {
             out.push_str(&excerpt(inner));
         } else {
             out.push(quote);
@@ -322,6 +433,45 @@ fn quoted_excerpts(message: &str) -> String {
 mod tests {
     use super::*;
     use std::time::Instant;
+
+    const SHADOW: &str =
+        "root:$6$abcdefghSALT$VeryLongHashValueThatIsSecret1234567890:19000:0:99999:7:::";
+
+    #[test]
+    fn non_finite_yaml_numbers_are_refused_with_their_key_path() {
+        for (text, expected) in [
+            (
+                "a: {b: [1, .nan]}",
+                "f.yaml: a.b[1]: must be a finite number, got .nan",
+            ),
+            ("x: -.inf", "f.yaml: x: must be a finite number, got -.inf"),
+            ("x: .Inf", "f.yaml: x: must be a finite number, got .inf"),
+            (".inf", "f.yaml: must be a finite number, got .inf"),
+        ] {
+            let value: serde_norway::Value = serde_norway::from_str(text).unwrap();
+            let e = check_finite_yaml(&value, "f.yaml").unwrap_err().message();
+            assert!(e.starts_with(expected), "{text}: {e}");
+        }
+        let fine: serde_norway::Value = serde_norway::from_str("a: [1, 2.5e300, -3]").unwrap();
+        assert!(check_finite_yaml(&fine, "f.yaml").is_ok());
+    }
+
+    #[test]
+    fn values_that_are_not_names_are_never_quoted() {
+        assert_eq!(excerpt("ground_frction"), "\"ground_frction\"");
+        assert_eq!(
+            excerpt(&"x".repeat(30)),
+            format!("\"{}\"...", "x".repeat(24))
+        );
+        assert_eq!(excerpt(SHADOW), "<79 characters, not shown>");
+        let message = format!("unknown field `{SHADOW}`, expected one of `ground`, `pegs`");
+        let shown = quoted_excerpts(&message);
+        assert_eq!(
+            shown,
+            "unknown field <79 characters, not shown>, expected one of `ground`, `pegs`"
+        );
+        assert!(!shown.contains("root"));
+    }
 
     #[test]
     fn devices_fifos_and_directories_are_refused_without_reading() {

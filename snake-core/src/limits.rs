@@ -160,9 +160,16 @@ pub const MAX_LATENCY_STEPS: u32 = 32;
 pub const MAX_OBS_NOISE: f64 = 10.0;
 
 /// Largest factor of a randomized scale (`randomize.mass_scale`, `effort_scale`, `kp_scale`,
-/// `kd_scale`, `skin_friction_scale`); scales must also be > 0. A hundredfold mass or motor is another
-/// robot, not a perturbed one.
+/// `kd_scale`, `skin_friction_scale`). A hundredfold mass or motor is another robot, not a perturbed
+/// one.
 pub const MAX_PHYSICS_SCALE: f64 = 100.0;
+
+/// Smallest factor of a randomized scale, for the same reason as [`MAX_PHYSICS_SCALE`]: a hundredth
+/// of the mass or the motor is another robot. Every value of `[MIN_PHYSICS_SCALE, MAX_PHYSICS_SCALE]`
+/// builds a finite simulation of every shipped body (snake-core/tests/randomize.rs runs each scale's
+/// ends, alone and together); a scale of 1e-300 made the first physics step non-finite, and a range
+/// the validator accepts must never fail at a reset.
+pub const MIN_PHYSICS_SCALE: f64 = 0.01;
 
 /// Largest model file read (a snakesim `.safetensors`, a Stable-Baselines3 `.zip`, or one member of
 /// such a zip once uncompressed), bytes (256 MiB: a network of the largest configurable width holds

@@ -327,8 +327,7 @@ impl RobotSpec {
         let shown = path.display().to_string();
         let text = reader.main(MAX_URDF_BYTES, "robot file")?;
         crate::files::check_yaml_shape(&text, &shown)?;
-        let file: RobotFile = serde_norway::from_str(&text)
-            .map_err(|e| crate::files::yaml_error(&shown, "a robot file", &e))?;
+        let file: RobotFile = crate::files::from_yaml(&text, &shown, "a robot file")?;
         let urdf_path = reader.dir().join(&file.urdf);
         let urdf = UrdfRobot::parse_file(
             &reader.named(&file.urdf, MAX_URDF_BYTES, "URDF")?,

@@ -12,7 +12,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::env::Physics;
 use crate::error::{invalid_at, Result};
-use crate::limits::{MAX_MOTOR_VELOCITY, MAX_PHYSICS_SCALE, MAX_WORLD_FRICTION};
+use crate::limits::{
+    short, MAX_MOTOR_VELOCITY, MAX_PHYSICS_SCALE, MAX_TARGET_ROWS, MAX_WORLD_FRICTION,
+};
 use crate::world::Dynamics;
 use crate::world_file::WorldSpec;
 use crate::{Body, Robot, RobotSpec, StartPose};
@@ -96,7 +98,12 @@ fn check(key: &str, v: Option<f64>, low: f64, high: f64, open_low: bool) -> Resu
             let left = if open_low { '(' } else { '[' };
             Err(invalid_at(
                 key,
-                format!("must be in {left}{low}, {high}], got {x}"),
+                format!(
+                    "must be in {left}{}, {}], got {}",
+                    short(low),
+                    short(high),
+                    short(x)
+                ),
             ))
         }
         _ => Ok(()),
@@ -228,7 +235,8 @@ pub struct Trajectory {
 }
 
 /// Builds `spec` at `start` in `world` with `overrides` applied and drives it with `targets`
-/// (row-major, one row of the robot's movable joints per physics step, in its joint order).
+/// (row-major, one row of the robot's movable joints per physics step, in its joint order; at most
+/// [`MAX_TARGET_ROWS`] rows, as `snake-cli run --targets` reads).
 pub fn run_targets(
     spec: &RobotSpec,
     start: StartPose,
@@ -236,6 +244,21 @@ pub fn run_targets(
     overrides: &Overrides,
     targets: &[f64],
 ) -> Result<Trajectory> {
+    let run = run_targets_until(spec, start, world, overrides, targets, &mut || false)?;
+    Ok(run.expect("a run that is never stopped ends"))
+}
+
+/// [`run_targets`] that asks `should_stop` before every physics step and gives up (`Ok(None)`) as
+/// soon as it says yes: how a caller lets a long run be interrupted (the Python module checks for
+/// Ctrl-C there) without this crate knowing of signals.
+pub fn run_targets_until(
+    spec: &RobotSpec,
+    start: StartPose,
+    world: &WorldSpec,
+    overrides: &Overrides,
+    targets: &[f64],
+    should_stop: &mut dyn FnMut() -> bool,
+) -> Result<Option<Trajectory>> {
     let mut spec = spec.clone();
     let mut world = world.clone();
     overrides.apply_to_spec(&mut spec, &mut world)?;
@@ -252,11 +275,20 @@ pub fn run_targets(
         ));
     }
     let steps = targets.len() / n;
+    if steps > MAX_TARGET_ROWS {
+        return Err(invalid_at(
+            "targets",
+            format!("{steps} rows, more than {MAX_TARGET_ROWS} (an hour of steps)"),
+        ));
+    }
     let mut out = Trajectory {
         base: Vec::with_capacity(steps),
         joints: vec![0.0; steps * n],
     };
     for (row, q) in targets.chunks(n).zip(out.joints.chunks_mut(n)) {
+        if should_stop() {
+            return Ok(None);
+        }
         let sim = body.sim_mut();
         sim.set_targets(row)?;
         sim.step()?;
@@ -265,5 +297,81 @@ pub fn run_targets(
         out.base.push([p.x, p.y, p.z, o.x, o.y, o.z, o.w]);
         sim.read_joints(q, &mut [])?;
     }
-    Ok(out)
+    Ok(Some(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn robot() -> RobotSpec {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/paper-cubes-5.yaml");
+        RobotSpec::load(&path).unwrap()
+    }
+
+    #[test]
+    fn a_stopped_run_ends_at_the_step_it_is_asked_to() {
+        let spec = robot();
+        let joints = spec.urdf.movable_joints().len();
+        let targets = vec![0.1; joints * 100];
+        let (start, world) = (spec.default_start(), WorldSpec::default());
+        let mut asked = 0;
+        let stopped = run_targets_until(
+            &spec,
+            start,
+            &world,
+            &Overrides::default(),
+            &targets,
+            &mut || {
+                asked += 1;
+                asked > 10
+            },
+        )
+        .unwrap();
+        assert!(stopped.is_none());
+        assert_eq!(
+            asked, 11,
+            "asked before each step, none run after the answer"
+        );
+        let run = run_targets(&spec, start, &world, &Overrides::default(), &targets).unwrap();
+        let until = run_targets_until(
+            &spec,
+            start,
+            &world,
+            &Overrides::default(),
+            &targets,
+            &mut || false,
+        )
+        .unwrap();
+        assert_eq!(until, Some(run));
+    }
+
+    #[test]
+    fn too_many_rows_are_refused_before_a_step() {
+        let spec = robot();
+        let joints = spec.urdf.movable_joints().len();
+        let targets = vec![0.0; joints * (MAX_TARGET_ROWS + 1)];
+        let e = run_targets_until(
+            &spec,
+            spec.default_start(),
+            &WorldSpec::default(),
+            &Overrides::default(),
+            &targets,
+            &mut || panic!("no step before the rows are checked"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("more than 864000"), "{e}");
+    }
+
+    #[test]
+    fn out_of_range_values_are_written_short() {
+        let overrides = Overrides {
+            kp: Some(1e300),
+            ..Overrides::default()
+        };
+        let e = overrides.validate().unwrap_err().to_string();
+        assert!(e.contains("got 1e300") && e.len() < 80, "{e}");
+    }
 }

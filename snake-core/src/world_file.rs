@@ -726,8 +726,7 @@ impl WorldSpec {
             WorldFile::default()
         } else {
             crate::files::check_yaml_shape(text, shown)?;
-            serde_norway::from_str(text)
-                .map_err(|e| crate::files::yaml_error(shown, "a world file", &e))?
+            crate::files::from_yaml(text, shown, "a world file")?
         };
         file.resolve_from(shown, reader)
     }

@@ -355,7 +355,22 @@ fn vector_env_i_is_the_single_env_seeded_s_plus_i() {
 
 #[test]
 fn bad_ranges_are_one_line_naming_the_key() {
-    let cases: [(Randomize, &str); 7] = [
+    let cases: [(Randomize, &str); 9] = [
+        (
+            // Accepted once (> 0), it made the first physics step non-finite at every reset.
+            Randomize {
+                mass_scale: Some([1e-300, 1e-300]),
+                ..Randomize::default()
+            },
+            "randomize.mass_scale: must lie within 0.01 <= low <= high <= 100, got [1e-300, 1e-300]",
+        ),
+        (
+            Randomize {
+                effort_scale: Some([0.5, 1e300]),
+                ..Randomize::default()
+            },
+            "randomize.effort_scale: must lie within 0.01 <= low <= high <= 100, got [0.5, 1e300]",
+        ),
         (
             Randomize {
                 mass_scale: Some([1.2, 0.8]),
@@ -420,4 +435,90 @@ fn bad_ranges_are_one_line_naming_the_key() {
         .unwrap_err()
         .to_string()
         .contains("unknown field `mass`"));
+}
+
+/// Every value a scale's range may hold builds a finite simulation: each scale at both ends of
+/// [`MIN_PHYSICS_SCALE`, `MAX_PHYSICS_SCALE`], alone and all together, on the paper's snake, the
+/// snakebot-gym snake (1 kg links), the yaw-pitch robot and a skinned snake, 2.5 s of a wave each.
+#[test]
+fn every_scale_the_validator_accepts_builds_a_finite_simulation() {
+    use snake_core::limits::{MAX_PHYSICS_SCALE, MIN_PHYSICS_SCALE};
+    let mut bodies = vec![
+        EnvConfig::for_task(Task::Goal, Preset::Paper, 10),
+        EnvConfig::for_task(Task::Goal, Preset::SnakebotGym, 10),
+        EnvConfig {
+            robot: Some(RobotRef::load(&robot_path()).unwrap()),
+            ..EnvConfig::for_task(Task::Goal, Preset::Paper, 15)
+        },
+    ];
+    let mut skinned = EnvConfig::for_task(Task::Paper, Preset::Paper, 5);
+    skinned.snake.skin_friction = Some(SkinFriction::new(0.1, 0.2, 0.3));
+    bodies.push(skinned);
+    for body in bodies {
+        let has_skin = body.snake.skin_friction.is_some();
+        for end in [MIN_PHYSICS_SCALE, MAX_PHYSICS_SCALE] {
+            let at = Some([end, end]);
+            let mut ranges = vec![
+                Randomize {
+                    mass_scale: at,
+                    ..Randomize::default()
+                },
+                Randomize {
+                    effort_scale: at,
+                    ..Randomize::default()
+                },
+                Randomize {
+                    kp_scale: at,
+                    ..Randomize::default()
+                },
+                Randomize {
+                    kd_scale: at,
+                    ..Randomize::default()
+                },
+                Randomize {
+                    mass_scale: at,
+                    effort_scale: at,
+                    kp_scale: at,
+                    kd_scale: at,
+                    skin_friction_scale: if has_skin { at } else { None },
+                    ..Randomize::default()
+                },
+            ];
+            if has_skin {
+                ranges.push(Randomize {
+                    skin_friction_scale: at,
+                    ..Randomize::default()
+                });
+            }
+            // Light bodies with strong motors, heavy ones with weak motors.
+            let other = if end == MIN_PHYSICS_SCALE {
+                MAX_PHYSICS_SCALE
+            } else {
+                MIN_PHYSICS_SCALE
+            };
+            ranges.push(Randomize {
+                mass_scale: at,
+                effort_scale: Some([other, other]),
+                kp_scale: Some([other, other]),
+                kd_scale: Some([other, other]),
+                ..Randomize::default()
+            });
+            for r in ranges {
+                let config = EnvConfig {
+                    randomize: Some(r),
+                    ..body.clone()
+                };
+                let mut env = SnakeEnv::new(config).unwrap();
+                env.reset(Some(3), ResetOptions::default())
+                    .unwrap_or_else(|e| panic!("{r:?}: {e}"));
+                let n = env.action_dim();
+                // 2.5 s at the goal task's 30 Hz (the paper task's 240 Hz: a shorter time, as many steps).
+                for t in 0..75 {
+                    if let Err(e) = env.step(&action(t, n)) {
+                        panic!("{r:?} at step {t}: {e}");
+                    }
+                }
+            }
+        }
+    }
 }

@@ -641,6 +641,7 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("model_bytes", core::MAX_MODEL_BYTES)?;
     d.set_item("config_bytes", core::MAX_CONFIG_BYTES)?;
     d.set_item("csv_bytes", core::MAX_CSV_BYTES)?;
+    d.set_item("target_rows", core::MAX_TARGET_ROWS)?;
     d.set_item("error_chars", core::MAX_ERROR_CHARS)?;
     Ok(d)
 }

@@ -2,13 +2,15 @@
 //! run --robot R --targets T.csv --output L.csv` runs it (snake-core's `run_targets`): the simulation
 //! `snakesim calibrate` fits to a log.
 
+use std::ffi::OsString;
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use snake_core::run_targets::{run_targets, Overrides};
-use snake_core::{RobotSpec, StartPose, WorldRef, WorldSpec};
+use snake_core::run_targets::{run_targets_until, Overrides};
+use snake_core::{RecordedFiles, RobotRef, RobotSpec, StartPose, WorldRef, WorldSpec};
 
 use crate::to_py;
 
@@ -17,6 +19,8 @@ use crate::to_py;
 /// `start` (x, y, z, yaw) or None for the robot file's start (raised by the world's ground, as
 /// `snake-cli run` does); `overrides_json` an object of `snakesim calibrate` fit keys. Returns the base
 /// pose after every step (steps, 7: x, y, z, qx, qy, qz, qw) and the joint angles (steps, joints).
+/// Python's signal handlers run every 20 ms of the simulation, so Ctrl-C (KeyboardInterrupt) and
+/// whatever a handler raises (snakesim's SIGTERM) end it within a physics step of that.
 #[pyfunction]
 #[pyo3(signature = (robot_path, targets, world_path=None, start=None, overrides_json="{}"))]
 #[allow(clippy::type_complexity)]
@@ -61,9 +65,36 @@ fn simulate_robot<'py>(
         }
     };
     let steps = shape[0];
+    let mut interrupted: Option<PyErr> = None;
+    let mut last_check = Instant::now();
+    let mut should_stop = || {
+        if last_check.elapsed() < Duration::from_millis(20) {
+            return false;
+        }
+        last_check = Instant::now();
+        match Python::attach(|py| py.check_signals()) {
+            Ok(()) => false,
+            Err(e) => {
+                interrupted = Some(e);
+                true
+            }
+        }
+    };
     let out = py
-        .detach(|| run_targets(&spec, start, &world_spec, &overrides, &rows))
+        .detach(|| {
+            run_targets_until(
+                &spec,
+                start,
+                &world_spec,
+                &overrides,
+                &rows,
+                &mut should_stop,
+            )
+        })
         .map_err(to_py)?;
+    let Some(out) = out else {
+        return Err(interrupted.expect("a run stops only when a signal handler raised"));
+    };
     let base: Vec<f64> = out.base.iter().flatten().copied().collect();
     let base = numpy::PyArray1::from_vec(py, base).reshape([steps, 7])?;
     let q = numpy::PyArray1::from_vec(py, out.joints).reshape([steps, joints])?;
@@ -109,8 +140,46 @@ fn robot_joint_names(robot_path: PathBuf) -> PyResult<Vec<String>> {
     Ok(spec.joint_names().iter().map(|s| s.to_string()).collect())
 }
 
-/// Adds `simulate_robot` and `robot_joint_names` to the module.
+/// The paths of the files a robot or world is read from ([`RecordedFiles`]): the main file as it was
+/// given, the others (a URDF, a heightfield CSV) beside it by the names it gives them.
+fn file_paths(files: &RecordedFiles) -> Vec<OsString> {
+    let main = files.main_name();
+    files
+        .files
+        .keys()
+        .map(|name| {
+            if *name == main {
+                files.path.clone().into_os_string()
+            } else {
+                files.dir().join(name).into_os_string()
+            }
+        })
+        .collect()
+}
+
+/// robot_files(robot_path) -> every file the robot is read from: the robot file and the URDF it
+/// names (a bare URDF alone), as paths (the others joined to the robot file's folder). A command
+/// that writes must not overwrite any of them.
+#[pyfunction]
+fn robot_files(robot_path: PathBuf) -> PyResult<Vec<OsString>> {
+    Ok(file_paths(
+        RobotRef::load(&robot_path).map_err(to_py)?.files(),
+    ))
+}
+
+/// world_files(world_path) -> every file the world is read from: the world file and the heightfield
+/// CSV it names, if any, as paths (as `robot_files`).
+#[pyfunction]
+fn world_files(world_path: PathBuf) -> PyResult<Vec<OsString>> {
+    Ok(file_paths(
+        WorldRef::load(&world_path).map_err(to_py)?.files(),
+    ))
+}
+
+/// Adds `simulate_robot`, `robot_joint_names`, `robot_files` and `world_files` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate_robot, m)?)?;
-    m.add_function(wrap_pyfunction!(robot_joint_names, m)?)
+    m.add_function(wrap_pyfunction!(robot_joint_names, m)?)?;
+    m.add_function(wrap_pyfunction!(robot_files, m)?)?;
+    m.add_function(wrap_pyfunction!(world_files, m)?)
 }

@@ -2,10 +2,17 @@
 the simulation it fits bit for bit against pybullet and snake-cli run, its outputs and its one-line errors
 on bad input (the 8 s, four-parameter fit of docs/calibration.md is a measurement, not a test)."""
 
+import contextlib
 import json
+import math
 import os
+import re
+import shutil
+import signal
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +20,8 @@ import pytest
 from snakesim import _core
 from snakesim.cli import app as cli
 from snakesim.limits import LIMITS
-from snakesim.runs.calibrate import FIT_KEYS, read_log, read_targets
+from snakesim.runs import calibrate as calibration
+from snakesim.runs.calibrate import FIT_KEYS, CalibrationError, read_log, read_targets
 
 pytest.importorskip("pybullet")
 pytest.importorskip("cmaes")
@@ -152,6 +160,12 @@ def _run(args, tmp_path, capsys):
         ("text", "is not a number"),
         ("cells", "cells, the header has"),
         ("unsorted", "expected 1 (rows sorted"),
+        # t is read and checked: a number, step/240 s to the millisecond.
+        ("banana", ":6: t: 'banana' is not a number"),
+        ("late", ":6: t: '0.025', expected step 5 x 1/240 s"),
+        # Values beyond LIMITS['position'] (a 1e300 made every candidate's error overflow).
+        ("absurd", ":6: base_x: '1e300' is beyond +-10000"),
+        ("absurd_joint", ":6: q3: '-2e4' is beyond +-10000"),
     ],
 )
 def test_bad_logs_are_one_line(logged, tmp_path, capsys, change, expected):
@@ -166,6 +180,13 @@ def test_bad_logs_are_one_line(logged, tmp_path, capsys, change, expected):
         lines[5] = ",".join(cells)
     elif change == "cells":
         lines[5] = lines[5].rsplit(",", 1)[0]
+    elif change in ("banana", "late", "absurd", "absurd_joint"):
+        cells = lines[5].split(",")
+        column = {"banana": 1, "late": 1, "absurd": 2, "absurd_joint": 12}[change]
+        cells[column] = {"banana": "banana", "late": "0.025", "absurd": "1e300", "absurd_joint": "-2e4"}[
+            change
+        ]
+        lines[5] = ",".join(cells)
     else:
         lines[1], lines[2] = lines[2], lines[1]
     log = tmp_path / "bad.csv"
@@ -285,3 +306,339 @@ def test_every_fit_key_is_an_override():
     with pytest.raises(ValueError, match="unknown field"):
         _core.simulate_robot(str(ROBOT), targets, None, None, '{"motors.stiffness": 1}')
     assert os.path.exists(ROBOT)
+
+
+def test_log_times_written_to_the_millisecond_are_read(logged, tmp_path):
+    """t within 1 ms of step/240 s (a log's time stamps rounded) is a log; the values are the same."""
+    lines = (logged / "log.csv").read_text().splitlines()
+    rounded = [lines[0]]
+    for line in lines[1:]:
+        cells = line.split(",")
+        cells[1] = f"{float(cells[1]):.3f}"
+        rounded.append(",".join(cells))
+    path = tmp_path / "rounded.csv"
+    path.write_text("\n".join(rounded) + "\n")
+    targets, log = _problem(logged)
+    assert np.array_equal(read_log(path, targets.shape[1], targets.shape[0]), log)
+
+
+# -- issue 57: --max-evals, candidates that all fail, strict JSON ---------------------------------------
+def _no_nan(text: str) -> dict:
+    """JSON as the standard reads it: NaN and Infinity are not JSON."""
+
+    def refuse(constant):
+        raise AssertionError(f"{constant} is not JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_max_evals_below_one_generation_is_refused(logged, tmp_path, capsys):
+    """It used to write the range's midpoint, never simulated, and "error_after": Infinity."""
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    err = _run([*args, "--max-evals", "7"], tmp_path, capsys)
+    assert "--max-evals 7 is less than one generation" in err and "--max-evals 8 or more" in err, err
+    # The population grows with the keys: 12 keys take 11 a generation.
+    bounds = {key: (0.5, 1.0) for key in FIT_KEYS}
+    with pytest.raises(CalibrationError, match="simulates 11 candidates a generation"):
+        calibration.check_max_evals(10, len(bounds))
+    calibration.check_max_evals(11, len(bounds))
+
+
+def test_max_evals_of_one_generation_fits(logged, tmp_path, capsys):
+    out, report = tmp_path / "fitted.yaml", tmp_path / "fit.json"
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    code = cli.main(
+        ["calibrate", *args, "--out", str(out), "--json", str(report), "--workers", "1", "--max-evals", "8"]
+    )
+    assert code == 0, capsys.readouterr().err
+    result = _no_nan(report.read_text())
+    assert result["simulations"] == 9 and result["generations"] == 1 and result["failed_simulations"] == 0
+    assert math.isfinite(result["error_after"]) and result["error_after"] <= result["error_before"]
+    assert 0.1 <= result["fitted"]["motors.kp"] <= 1 and out.exists()
+
+
+class _FailsAbove(calibration.Problem):
+    """A problem whose simulation fails (as an unstable one does) for kp above `limit`."""
+
+    limit = 0.3
+
+    def error(self, values):
+        if values.get("motors.kp", 0.0) > self.limit:
+            return math.inf
+        return super().error(values)
+
+
+def test_a_failed_candidate_is_never_the_fit(logged):
+    targets, log = _problem(logged)
+    problem = _FailsAbove(str(ROBOT), targets, log)
+    result = calibration.calibrate(problem, {"motors.kp": (0.05, 1.0)}, max_evals=16, seed=3)
+    assert result["failed_simulations"] > 0
+    assert result["fitted"]["motors.kp"] <= _FailsAbove.limit and math.isfinite(result["error_after"])
+    _no_nan(json.dumps(result, allow_nan=False))
+
+
+def test_no_candidate_with_a_finite_error_is_refused(logged):
+    """Every error overflows (a log of 1e300, as read_log now refuses): no fit, rather than the
+    sentinel error 1e12 reported as one."""
+    targets, log = _problem(logged)
+    problem = calibration.Problem(str(ROBOT), targets, np.full_like(log, 1e300))
+    with pytest.raises(CalibrationError, match="no fit: every one of the 8 candidates' simulations failed"):
+        calibration.calibrate(problem, {"motors.kp": (0.1, 1.0)}, max_evals=8)
+    assert calibration.trajectory_error(log[:, :7], log[:, 7:], problem.log) == math.inf
+
+
+def test_numbers_in_messages_are_short(logged, tmp_path, capsys):
+    """A 1e300 bound and a forty-digit count are written short, not as hundreds of digits."""
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0:1e300")
+    err = _run(args, tmp_path, capsys)
+    assert "motors.kp" in err and "1e300" in err.replace("+", "") and not re.search(r"\d{30}", err), err
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    err = _run([*args, "--max-evals", "1" * 40], tmp_path, capsys)
+    assert "--max-evals" in err and not re.search(r"\d{30}", err), err
+
+
+# -- issue 57: outputs checked before the first simulation, written together or not at all -----------
+@pytest.fixture
+def no_simulation(monkeypatch):
+    """Fails the test if anything is simulated (for outputs that must be refused before)."""
+
+    def simulate(self, values):
+        raise AssertionError("simulated before the outputs were checked")
+
+    monkeypatch.setattr(calibration.Problem, "simulate", simulate)
+
+
+@pytest.mark.parametrize("plot", ["fit", "fit.tmp", "fit.gif"])
+def test_a_plot_without_a_figure_extension_is_refused_up_front(logged, tmp_path, capsys, no_simulation, plot):
+    """It used to take the temporary file's random suffix for the format, after the fit."""
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    err = _run([*args, "--plot", str(tmp_path / plot)], tmp_path, capsys)
+    assert f"--plot {tmp_path / plot}: expected a .png, .pdf or .svg file" in err, err
+    assert not (tmp_path / plot).exists()
+
+
+def test_a_fifo_that_nobody_reads_is_refused_up_front(logged, tmp_path, capsys, no_simulation):
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    code = cli.main(["calibrate", *args, "--out", str(tmp_path / "out.yaml"), "--json", str(fifo)])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and "\n" not in err and f"--json {fifo}: a FIFO that nobody reads" in err, err
+    assert not (tmp_path / "out.yaml").exists()
+
+
+def test_a_fifo_with_a_reader_gets_the_json(logged, tmp_path, capsys):
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    received: list[bytes] = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_bytes()), daemon=True)
+    reader.start()
+    time.sleep(0.2)  # the reader opens the FIFO (an open for writing would otherwise be refused)
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    out = tmp_path / "out.yaml"
+    code = cli.main(["calibrate", *args, "--out", str(out), "--json", str(fifo), "--max-evals", "8"])
+    assert code == 0, capsys.readouterr().err
+    reader.join(10)
+    assert _no_nan(received[0].decode())["simulations"] == 9 and out.exists()
+    assert fifo.exists() and not fifo.is_file()
+
+
+def test_an_output_that_fails_replaces_no_other(logged, tmp_path, capsys):
+    """--json /dev/full fails only when written, after the fit: --out keeps its old content."""
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
+    out = tmp_path / "out.yaml"
+    out.write_text("old\n")
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    code = cli.main(["calibrate", *args, "--out", str(out), "--json", "/dev/full", "--max-evals", "8"])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and "\n" not in err and "--json /dev/full" in err, err
+    assert out.read_text() == "old\n" and sorted(p.name for p in tmp_path.iterdir()) == ["out.yaml"]
+
+
+def test_a_failed_rename_puts_back_the_files_already_replaced(logged, tmp_path, capsys, monkeypatch):
+    out, report = tmp_path / "out.yaml", tmp_path / "r.json"
+    out.write_text("old\n")
+    replace = os.replace
+
+    def fail_for_the_json(src, dst):
+        if os.fspath(dst) == os.path.realpath(report):
+            raise OSError(28, "No space left on device")
+        replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", fail_for_the_json)
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    code = cli.main(["calibrate", *args, "--out", str(out), "--json", str(report), "--max-evals", "8"])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and f"cannot write --json {report}: No space left on device" in err, err
+    assert out.read_text() == "old\n" and sorted(p.name for p in tmp_path.iterdir()) == ["out.yaml"]
+
+
+def test_a_plot_that_fails_writes_nothing(logged, tmp_path, capsys, monkeypatch):
+    def fail(*args):
+        raise OSError(5, "Input/output error", "fig.png")
+
+    monkeypatch.setattr(calibration, "plot", fail)
+    out, report, figure = tmp_path / "out.yaml", tmp_path / "r.json", tmp_path / "fig.png"
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    code = cli.main(
+        [
+            "calibrate",
+            *args,
+            "--out",
+            str(out),
+            "--json",
+            str(report),
+            "--plot",
+            str(figure),
+            "--max-evals",
+            "8",
+        ]
+    )
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and "Input/output error" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_outputs_may_not_replace_the_files_the_robot_and_world_name(tmp_path, logged, capsys, no_simulation):
+    """--out D/yaw-pitch-16.urdf used to exit 0 and replace the URDF that D/yaw-pitch-16.yaml names
+    with YAML; a world's heightfield CSV is an input as well."""
+    for name in ("yaw-pitch-16.yaml", "yaw-pitch-16.urdf"):
+        shutil.copy(ROBOT.parent / name, tmp_path / name)
+    for name in ("hills.yaml", "hills.csv"):
+        shutil.copy(REPO / "worlds" / name, tmp_path / name)
+    urdf = (tmp_path / "yaw-pitch-16.urdf").read_bytes()
+    base = ["calibrate", "--targets", str(logged / "targets.csv"), "--log", str(logged / "log.csv")]
+    base += ["--robot", str(tmp_path / "yaw-pitch-16.yaml"), "--fit", "motors.kp=0.1:1"]
+    for extra in (
+        ["--out", str(tmp_path / "yaw-pitch-16.urdf")],
+        ["--out", str(tmp_path / "fitted.yaml"), "--json", str(tmp_path / "hills.csv")],
+    ):
+        world = ["--world", str(tmp_path / "hills.yaml")]
+        code = cli.main([*base, *world, *extra])
+        err = capsys.readouterr().err.strip()
+        assert code == 1 and "which this command reads" in err and "\n" not in err, err
+    assert (tmp_path / "yaw-pitch-16.urdf").read_bytes() == urdf
+    assert not (tmp_path / "fitted.yaml").exists()
+
+
+def test_the_files_a_robot_and_a_world_read():
+    assert sorted(_core.robot_files(str(ROBOT))) == sorted(
+        [str(ROBOT), str(ROBOT.with_name("yaw-pitch-16.urdf"))]
+    )
+    assert _core.robot_files(str(ROBOT.with_suffix(".urdf"))) == [str(ROBOT.with_suffix(".urdf"))]
+    hills = REPO / "worlds" / "hills.yaml"
+    assert sorted(_core.world_files(str(hills))) == [str(hills.with_suffix(".csv")), str(hills)]
+
+
+# -- issue 57: bounded inputs, interruptible simulations ------------------------------------------------
+SMALL = REPO / "robots" / "paper-cubes-5.yaml"  # 5 joints
+
+
+def _write_run(folder: Path, rows: int) -> tuple[Path, Path]:
+    """A targets file and a (made-up, well-formed) log of `rows` rows for SMALL."""
+    names = _core.robot_joint_names(str(SMALL))
+    targets, log = folder / "targets.csv", folder / "log.csv"
+    with open(targets, "w") as f:
+        f.write(",".join(["step", *names]) + "\n")
+        f.writelines(f"{k},0.3,-0.3,0.3,-0.3,0.3\n" for k in range(1, rows + 1))
+    with open(log, "w") as f:
+        f.write(",".join([*calibration.BASE_COLUMNS, *(f"q{j}" for j in range(len(names)))]) + "\n")
+        f.writelines(f"{k},{k / 240!r},0,0,0.25,0,0,0,1,0,0,0,0,0\n" for k in range(1, rows + 1))
+    return targets, log
+
+
+def test_targets_over_the_row_limit_are_refused_while_read(tmp_path):
+    """An hour of 1/240 s steps, as snake-cli run --targets: row 864,001 is refused as it is read,
+    without holding the file's rows in memory (it took 1.18 GB for 53 MB of CSV, then simulated)."""
+    rows = LIMITS["target_rows"]
+    targets, _ = _write_run(tmp_path, 1)
+    with open(targets, "a") as f:
+        f.writelines(f"{k},0.3,-0.3,0.3,-0.3,0.3\n" for k in range(2, rows + 2))
+    probe = (
+        "import resource, sys; from snakesim.cli.app import main; code = main(sys.argv[1:]); "
+        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss); sys.exit(code)"
+    )
+    args = ["calibrate", "--robot", str(SMALL), "--targets", str(targets), "--log", str(targets)]
+    args += ["--fit", "motors.kp=0.1:1", "--out", str(tmp_path / "out.yaml")]
+    start = time.monotonic()
+    run = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True, timeout=120)
+    seconds = time.monotonic() - start
+    assert run.returncode == 1, run.stderr
+    assert f"targets.csv:{rows + 2}: more than 864,000 rows (LIMITS['target_rows']" in run.stderr
+    peak_mb = int(run.stdout.split()[-1]) / 1024
+    # ~80 MB on the development machine (the interpreter and numpy ~47 MB, the rows 35 MB).
+    assert peak_mb < 250, peak_mb
+    assert seconds < 60, seconds
+    assert not (tmp_path / "out.yaml").exists()
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs Linux's /proc")
+@pytest.mark.parametrize(
+    ("workers", "sig", "code"), [(1, "SIGINT", 130), (1, "SIGTERM", 143), (2, "SIGINT", 130)]
+)
+def test_a_long_simulation_is_interrupted_at_once(tmp_path_factory, workers, sig, code):
+    """Ctrl-C (and SIGTERM) used to wait for the simulation: 10 minutes on a million rows. Now the
+    process answers within 2 s, in the main process (--workers 1) or with the simulations in spawned
+    worker processes (which end too), writes nothing and exits 130 (143). With workers the signal goes
+    to the whole process group, as a terminal's Ctrl-C does: the workers print nothing."""
+    folder = tmp_path_factory.mktemp("interrupt")
+    targets, log = _write_run(folder, 30_000)  # ~2.5 s a simulation
+    out = folder / "out.yaml"
+    args = ["calibrate", "--robot", str(SMALL), "--targets", str(targets), "--log", str(log)]
+    args += ["--fit", "motors.kp=0.1:1", "--out", str(out), "--workers", str(workers)]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "snakesim", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    workers_seen: list[int] = []
+    try:
+        deadline = time.monotonic() + 120
+        if workers == 1:
+            time.sleep(2.0)  # reading the files or simulating
+        else:
+            # The first simulation runs in the main process; then the workers start (and the
+            # resource tracker), import snakesim and simulate.
+            while len(_children(process.pid)) <= workers and time.monotonic() < deadline:
+                time.sleep(0.1)
+            time.sleep(2.0)
+            workers_seen = _children(process.pid)
+            assert len(workers_seen) > workers, "no workers"
+        assert process.poll() is None, process.communicate()
+        sent = time.monotonic()
+        if workers == 1:
+            process.send_signal(getattr(signal, sig))
+        else:
+            os.killpg(process.pid, getattr(signal, sig))
+        stdout, stderr = process.communicate(timeout=30)
+        answered = time.monotonic() - sent
+    except BaseException:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+        raise
+    assert answered < 2.0, answered
+    assert process.returncode == code, stderr
+    assert stderr.strip() == f"snakesim calibrate: {'interrupted' if code == 130 else 'terminated'}"
+    assert sorted(p.name for p in folder.iterdir()) == ["log.csv", "targets.csv"]
+    deadline = time.monotonic() + 5  # the resource tracker ends once its pipe closes
+    while any(map(_alive, workers_seen)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert [pid for pid in workers_seen if _alive(pid)] == []
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state != "Z"  # a zombie has ended (its reaper may be slow)

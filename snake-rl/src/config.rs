@@ -584,20 +584,45 @@ pub fn merge(base: &mut Value, overlay: &Value) {
 /// Parses YAML text into a JSON value (YAML 1.2 scalars: `3e-4` is a number, `yes` a string).
 pub fn parse_yaml(text: &str) -> Result<Value, ConfigError> {
     snake_core::files::check_yaml_shape(text, "the config").map_err(|e| err(e.message()))?;
-    let value: Value = serde_norway::from_str(text).map_err(|e| {
+    let value = yaml_value(text, "", |e| {
         let at = e
             .location()
             .map(|l| format!(" (line {}, column {})", l.line(), l.column()))
             .unwrap_or_default();
         let message = e.to_string();
         let first = message.split(" at line").next().unwrap_or(&message);
-        err(format!("not valid YAML{at}: {first}"))
+        err(format!(
+            "not valid YAML{at}: {}",
+            snake_core::files::quoted_excerpts(first)
+        ))
     })?;
     Ok(if value.is_null() {
         Value::Object(Map::new())
     } else {
         value
     })
+}
+
+/// YAML text as a JSON value, with every non-finite number (`.nan`, `.inf`) refused naming its key
+/// path under `prefix` (serde would make it a `null`, which reads as "not given"); `parse_error` words
+/// the parser's own errors.
+fn yaml_value(
+    text: &str,
+    prefix: &str,
+    parse_error: impl Fn(serde_norway::Error) -> ConfigError,
+) -> Result<Value, ConfigError> {
+    let yaml: serde_norway::Value = serde_norway::from_str(text).map_err(&parse_error)?;
+    if let Err(e) = snake_core::files::check_finite_yaml(&yaml, "") {
+        let e = match e {
+            snake_core::Error::InvalidArgument(invalid) => invalid.under(prefix),
+            other => snake_core::Invalid::new(other.to_string()),
+        };
+        return Err(match e.key() {
+            Some(key) => key_err(key, e.detail()),
+            None => err(e.to_string()),
+        });
+    }
+    serde_norway::from_value(yaml).map_err(parse_error)
 }
 
 /// `KEY=VALUE` overrides (`ppo.n_steps=256`, `env.reward.progress_weight=1`) as one nested mapping;
@@ -620,11 +645,13 @@ pub fn parse_overrides<S: AsRef<str>>(items: &[S]) -> Result<Value, ConfigError>
         let value = if text.trim().is_empty() {
             Value::Null
         } else {
-            serde_norway::from_str::<Value>(text).map_err(|_| {
+            yaml_value(text, key, |_| {
                 err(format!(
-                    "--set {key}: cannot parse the value '{text}' as YAML"
+                    "--set {key}: cannot parse the value {} as YAML",
+                    snake_core::files::excerpt(text)
                 ))
-            })?
+            })
+            .map_err(|e| err(format!("--set {}", e.0)))?
         };
         let mut nested = value;
         for part in key.rsplit('.') {
@@ -640,20 +667,49 @@ pub fn parse_overrides<S: AsRef<str>>(items: &[S]) -> Result<Value, ConfigError>
 /// Deserialises `value` as `T`, naming the key path of the first error (prefixed by `prefix`).
 pub fn from_value<T: de::DeserializeOwned>(value: Value, prefix: &str) -> Result<T, ConfigError> {
     serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
+        let path = shown_path(e.path());
         let path = match (prefix.is_empty(), path.as_str()) {
             (true, ".") => String::new(),
             (true, p) => p.to_owned(),
             (false, ".") => prefix.to_owned(),
             (false, p) => format!("{prefix}.{p}"),
         };
-        let inner = e.into_inner().to_string();
+        // serde quotes the keys and values it refuses whole: cut, or withheld where they do not read
+        // as names (a file that is not a configuration).
+        let inner = snake_core::files::quoted_excerpts(&e.into_inner().to_string());
         if path.is_empty() {
             err(inner)
         } else {
             key_err(path, inner)
         }
     })
+}
+
+/// A key path as serde_path_to_error writes it (`a.b[0].c`, `.` for the root), each key shown as
+/// [`snake_core::files::withheld_unless_name`] shows it.
+fn shown_path(path: &serde_path_to_error::Path) -> String {
+    use serde_path_to_error::Segment;
+    let mut out = String::new();
+    for segment in path {
+        let part = match segment {
+            Segment::Seq { index } => {
+                out.push_str(&format!("[{index}]"));
+                continue;
+            }
+            Segment::Map { key } => snake_core::files::withheld_unless_name(key),
+            Segment::Enum { variant } => snake_core::files::withheld_unless_name(variant),
+            Segment::Unknown => "?".to_owned(),
+        };
+        if !out.is_empty() {
+            out.push('.');
+        }
+        out.push_str(&part);
+    }
+    if out.is_empty() {
+        ".".to_owned()
+    } else {
+        out
+    }
 }
 
 /// The env of a run (and of `snakesim.SnakeEnv(**keywords)`): `joints` and `preset` choose the

@@ -425,18 +425,16 @@ impl<'a> Parsed<'a> {
         let mut env: Map<String, Value> = serde_json::from_str(self.meta("env")?)
             .map_err(|e| self.error(format!("metadata 'env' is not a JSON mapping ({e})")))?;
         find_env_files(&mut env, self.path);
-        let notes = match self.meta.get("env_files") {
-            None => Vec::new(),
-            Some(text) => {
-                let records = serde_json::from_str::<Value>(text)
-                    .map_err(|e| self.error(format!("metadata 'env_files' is not JSON ({e})")))?;
-                apply_env_files(&mut env, &records)
-                    .map_err(|e| self.error(e))?
-                    .into_iter()
-                    .map(|n| crate::one_line(format!("{}: {n}", self.path.display())))
-                    .collect()
-            }
+        let records = match self.meta.get("env_files") {
+            None => Value::Object(Map::new()),
+            Some(text) => serde_json::from_str::<Value>(text)
+                .map_err(|e| self.error(format!("metadata 'env_files' is not JSON ({e})")))?,
         };
+        let notes = apply_env_files(&mut env, &records)
+            .map_err(|e| self.error(e))?
+            .into_iter()
+            .map(|n| crate::one_line(format!("{}: {n}", self.path.display())))
+            .collect();
         let mut recorded = match self.meta.get("env_config") {
             None => None,
             Some(text) => Some(
@@ -681,7 +679,8 @@ fn record_value(files: &RecordedFiles) -> Value {
 /// ...}`, which the env builds from the recorded texts alone), and a note says so, one per file
 /// replaced. A keyword that is a record already is kept. A record that does not build (a file it
 /// lacks or does not use, a text its parser refuses) or does not fit the keywords (an unknown key, a
-/// key the env has no file for, another file name) is an error, one line.
+/// key the env has no file for, another file name) is an error, one line, and so is a `robot` or
+/// `world` path without a record: the loader opens no file a model names but those of its record.
 pub fn apply_env_files(
     env: &mut Map<String, Value>,
     records: &Value,
@@ -736,6 +735,18 @@ pub fn apply_env_files(
             files: record.files,
         };
         env.insert(key.clone(), record_value(&record));
+    }
+    // A model's files come from its record: a path it names without one is never opened (a hostile
+    // model could name any file on this machine, and its parser's error would quote it).
+    for key in ENV_FILE_KEYS {
+        if let (Some(Value::String(path)), false) = (env.get(key), records.contains_key(key)) {
+            return Err(format!(
+                "its env names the {key} file {} but the model holds no record of its files \
+                 (docs/formats.md; scripts/record_env_files.py adds one to a model made before \
+                 records)",
+                snake_core::files::excerpt(path)
+            ));
+        }
     }
     Ok(notes)
 }

@@ -22,7 +22,10 @@ use rand_chacha::ChaCha12Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid_at, Result};
-use crate::limits::{MAX_LATENCY_STEPS, MAX_OBS_NOISE, MAX_PHYSICS_SCALE, MAX_WORLD_FRICTION};
+use crate::limits::{
+    short, MAX_LATENCY_STEPS, MAX_OBS_NOISE, MAX_PHYSICS_SCALE, MAX_WORLD_FRICTION,
+    MIN_PHYSICS_SCALE,
+};
 use crate::Body;
 
 /// The physics stream's number: "RANDOMIZ" in ASCII. Any value other than the main stream's (0) would
@@ -135,12 +138,12 @@ impl Randomize {
     /// Checks every range; the one-line error names the key (`randomize.mass_scale ...`).
     /// `has_skin`: whether the body has skin friction (`skin_friction_scale` needs it).
     pub fn validate(&self, has_skin: bool) -> Result<()> {
-        let scale = (0.0, MAX_PHYSICS_SCALE, false);
-        for (key, range, (low_bound, high_bound, low_inclusive)) in [
+        let scale = (MIN_PHYSICS_SCALE, MAX_PHYSICS_SCALE);
+        for (key, range, (low_bound, high_bound)) in [
             (
                 "ground_friction",
                 self.ground_friction,
-                (0.0, MAX_WORLD_FRICTION, true),
+                (0.0, MAX_WORLD_FRICTION),
             ),
             ("mass_scale", self.mass_scale, scale),
             ("effort_scale", self.effort_scale, scale),
@@ -149,41 +152,39 @@ impl Randomize {
             (
                 "latency_steps",
                 self.latency_steps,
-                (0.0, f64::from(MAX_LATENCY_STEPS), true),
+                (0.0, f64::from(MAX_LATENCY_STEPS)),
             ),
-            ("obs_noise", self.obs_noise, (0.0, MAX_OBS_NOISE, true)),
+            ("obs_noise", self.obs_noise, (0.0, MAX_OBS_NOISE)),
             ("skin_friction_scale", self.skin_friction_scale, scale),
         ] {
             let Some([low, high]) = range else { continue };
-            let open = if low_inclusive { "<=" } else { "<" };
+            let shown = format!("[{}, {}]", short(low), short(high));
             if !(low.is_finite() && high.is_finite()) {
                 return Err(invalid_at(
                     format!("randomize.{key}"),
-                    format!("must be finite, got [{low}, {high}]"),
+                    format!("must be finite, got {shown}"),
                 ));
             }
             if low > high {
                 return Err(invalid_at(
                     format!("randomize.{key}"),
-                    format!("must have low <= high, got [{low}, {high}]"),
+                    format!("must have low <= high, got {shown}"),
                 ));
             }
-            let low_ok = if low_inclusive {
-                low >= low_bound
-            } else {
-                low > low_bound
-            };
-            if !low_ok || high > high_bound {
+            if low < low_bound || high > high_bound {
                 return Err(invalid_at(
                     format!("randomize.{key}"),
                     format!(
-                    "must lie within {low_bound} {open} low <= high <= {high_bound}, got [{low}, {high}]"
-                )));
+                        "must lie within {} <= low <= high <= {}, got {shown}",
+                        short(low_bound),
+                        short(high_bound)
+                    ),
+                ));
             }
             if key == "latency_steps" && (low.fract() != 0.0 || high.fract() != 0.0) {
                 return Err(invalid_at(
                     "randomize.latency_steps",
-                    format!("must be whole env steps, got [{low}, {high}]"),
+                    format!("must be whole env steps, got {shown}"),
                 ));
             }
         }

@@ -2,9 +2,11 @@
 
 Reading: :func:`read_bytes` and :func:`open_regular` take regular files only (a FIFO, a socket or
 ``/dev/zero`` is refused at once, never waited on or read forever) of at most a size cap from
-``LIMITS``. Writing: :func:`write_atomically` never truncates or replaces an existing file half-way,
-writes through a character device or a FIFO named as the output, and replaces the file a symlink points
-to rather than the link.
+``LIMITS``; each file read joins the one set of the files this process reads (:func:`is_input`, shared
+with the Rust core's readers). Writing: :func:`write_atomically` never truncates or replaces an existing
+file half-way, never replaces a file the process read (:func:`rewrite_atomically` for a run's own
+state), writes through a character device or a FIFO named as the output, and replaces the file a
+symlink points to rather than the link.
 """
 
 from __future__ import annotations
@@ -64,6 +66,8 @@ def open_regular(path: str | os.PathLike, limit: str) -> BinaryIO:
         if not stat.S_ISREG(info.st_mode):
             raise FileError(not_regular)
         check_size(info.st_size, limit, name)
+        # One set of the files this process reads, Rust's readers' and ours: no output replaces one.
+        _core.remember_input(name)
         fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) & ~os.O_NONBLOCK)
         return os.fdopen(fd, "rb")
     except BaseException:
@@ -104,12 +108,37 @@ def output_kind(path: str | os.PathLike) -> str | None:
     return "other"
 
 
+def is_input(path: str | os.PathLike) -> bool:
+    """True when ``path`` (after links, however it is spelled) is a file this process has read: a
+    model, statistics or configuration read here, or a robot, URDF, world, heightfield or targets
+    file read by the Rust core (one set for both, ``snake_core::files``)."""
+    return _core.is_input(os.fspath(path))
+
+
+def forget_input(path: str | os.PathLike) -> None:
+    """Forgets that ``path`` was read: for a writer that replaces its own earlier output after
+    reading it (a run's configuration on resume, a sweep's manifest)."""
+    _core.forget_input(os.fspath(path))
+
+
+class InputOverwrite(FileError):
+    """An output that would replace a file the process reads."""
+
+
 def write_atomically(target: str | os.PathLike, write: Callable[[str], T]) -> T:
     """Calls ``write(tmp)`` for a temporary file whose name ends like the target's (writers that
     choose the format by the name choose the right one), then puts it in place (see
     :func:`output_file`); returns what ``write`` returned."""
     with output_file(target) as tmp:
         return write(tmp)
+
+
+def rewrite_atomically(target: str | os.PathLike, write: Callable[[str], T]) -> T:
+    """:func:`write_atomically` for a writer that replaces its own state after reading it (a run's
+    configuration, versions and evaluations on resume, a sweep's manifest, a trainer's checkpoints):
+    the one kind of output that may replace a file the process read."""
+    forget_input(target)
+    return write_atomically(target, write)
 
 
 @contextmanager
@@ -132,6 +161,8 @@ def output_file(target: str | os.PathLike) -> Iterator[str]:
         return
     if kind not in (None, "file"):
         raise FileError(f"cannot write {shown}: it is a {'directory' if kind == 'directory' else 'socket'}")
+    if kind == "file" and is_input(target):
+        raise InputOverwrite(f"cannot write {shown}: it is a file this run reads")
     fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=target.suffix)
     os.close(fd)
     try:
@@ -140,6 +171,8 @@ def output_file(target: str | os.PathLike) -> Iterator[str]:
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         yield tmp
+        if is_input(target):  # read while the output was written
+            raise InputOverwrite(f"cannot write {shown}: it is a file this run reads")
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):

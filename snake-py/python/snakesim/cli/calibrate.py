@@ -3,104 +3,282 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
+import fcntl
 import json
 import math
 import os
+import shutil
 import sys
+import tempfile
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 from snakesim.cli.errors import UserError, check_distinct, check_writable
-from snakesim.files import write_atomically
+from snakesim.files import output_kind
+from snakesim.limits import LIMITS
+
+#: The figure formats of ``--plot``, by the name's extension (as ``snakesim plot``).
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 def _start(text: str) -> tuple[float, float, float, float]:
     try:
         values = tuple(float(v) for v in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not X,Y,Z,YAW numbers") from None
+        raise argparse.ArgumentTypeError(f"{text[:24]!r} is not X,Y,Z,YAW numbers") from None
     if len(values) != 4 or not all(math.isfinite(v) for v in values):
-        raise argparse.ArgumentTypeError(f"{text!r}: expected four finite numbers X,Y,Z,YAW")
+        raise argparse.ArgumentTypeError(f"{text[:24]!r}: expected four finite numbers X,Y,Z,YAW")
     return values  # type: ignore[return-value]
+
+
+def _integer(text: str) -> int:
+    """An argparse type: an integer (underscores allowed), quoted short when it is not one."""
+    try:
+        return int(text.replace("_", ""))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text[:24]!r}") from None
+
+
+@dataclass
+class _Output:
+    path: str | os.PathLike  # as given
+    flag: str
+    real: Path  # what gets written: a symlink's target
+    fd: int | None = None  # a character device or FIFO, opened when checked, written through
+    tmp: str | None = None  # the rendered content
+    existed: bool = False
+
+    @property
+    def label(self) -> str:
+        return f"{self.flag} {os.fspath(self.path)}"
+
+
+class _Outputs(contextlib.AbstractContextManager):
+    """The command's outputs, checked before anything is simulated and written only once every one is
+    rendered, as nearly all-or-nothing as files allow.
+
+    Checked: as every command checks them (:func:`check_writable`, :func:`check_distinct`: not one of
+    the files read, not a directory, ...), and a character device or FIFO is opened for writing at
+    once, so a FIFO that nobody reads is refused before the fit (and one that has a reader keeps it).
+    Rendered (:meth:`render`): into a temporary file, beside a regular file's target or in a private
+    folder for a device or FIFO. Put in place (:meth:`commit`): the devices and FIFOs first (a failed
+    write there, ``/dev/full``, replaces no file), then the files renamed over their targets; when a
+    rename fails, the files already replaced get their old content back. On leaving, every temporary
+    file is removed and every device closed.
+    """
+
+    def __init__(self, outputs: list[tuple[str | os.PathLike, str]], inputs: Iterable[str | os.PathLike]):
+        inputs = list(inputs)
+        for path, flag in outputs:
+            check_writable(path, flag, inputs)
+        check_distinct(outputs)
+        self.items: list[_Output] = []
+        self.scratch = tempfile.TemporaryDirectory(prefix="snakesim-out-")
+        try:
+            for path, flag in outputs:
+                item = _Output(path, flag, Path(os.path.realpath(path)))
+                if output_kind(item.real) in ("device", "fifo"):
+                    item.fd = _open_through(item)
+                self.items.append(item)
+        except BaseException:
+            self.__exit__(None, None, None)
+            raise
+
+    def __exit__(self, *exc) -> None:
+        for item in self.items:
+            if item.fd is not None:
+                os.close(item.fd)
+                item.fd = None
+            if item.tmp is not None and os.path.lexists(item.tmp):  # not put in place
+                with contextlib.suppress(OSError):
+                    os.unlink(item.tmp)
+        self.scratch.cleanup()
+
+    def render(self, flag: str, write: Callable[[str], object]) -> None:
+        """Calls ``write(tmp)`` for the output of ``flag``: a temporary file whose name ends as the
+        output's does."""
+        (item,) = (i for i in self.items if i.flag == flag)
+        if item.fd is not None:
+            item.tmp = os.path.join(self.scratch.name, f"{flag.lstrip('-')}{item.real.suffix}")
+        else:
+            fd, item.tmp = tempfile.mkstemp(
+                dir=item.real.parent, prefix=f".{item.real.name}.", suffix=item.real.suffix
+            )
+            os.close(fd)
+            umask = os.umask(0)  # mkstemp's file is private (0600): give it a new file's permissions
+            os.umask(umask)
+            os.chmod(item.tmp, 0o666 & ~umask)
+        write(item.tmp)
+
+    def commit(self) -> None:
+        through = [i for i in self.items if i.fd is not None]
+        files = [i for i in self.items if i.fd is None]
+        for item in through:
+            assert item.tmp is not None and item.fd is not None
+            try:
+                with open(item.tmp, "rb") as f, os.fdopen(os.dup(item.fd), "wb", buffering=0) as out:
+                    shutil.copyfileobj(f, out)
+            except BrokenPipeError:
+                raise UserError(f"cannot write {item.label}: its reader went away") from None
+            except OSError as error:
+                raise UserError(f"cannot write {item.label}: {error.strerror or error}") from None
+        done: list[tuple[_Output, str | None]] = []
+        try:
+            for item in files:
+                assert item.tmp is not None
+                backup = None
+                if os.path.lexists(item.real):
+                    item.existed = True
+                    with contextlib.suppress(OSError):  # no hard links here: it cannot be put back
+                        os.link(item.real, item.tmp + ".old")
+                        backup = item.tmp + ".old"
+                try:
+                    os.replace(item.tmp, item.real)
+                except OSError as error:
+                    raise UserError(f"cannot write {item.label}: {error.strerror or error}") from None
+                done.append((item, backup))
+        except BaseException:
+            for item, backup in reversed(done):
+                with contextlib.suppress(OSError):
+                    if backup is not None:
+                        os.replace(backup, item.real)
+                    elif not item.existed:
+                        os.unlink(item.real)
+            raise
+        finally:
+            for _, backup in done:
+                if backup is not None and os.path.lexists(backup):
+                    os.unlink(backup)
+
+
+def _open_through(item: _Output) -> int:
+    """A character device or FIFO output opened for writing (blocking), or UserError: a FIFO that
+    nobody reads is refused rather than waited on."""
+    try:
+        fd = os.open(item.real, os.O_WRONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError as error:
+        if error.errno == errno.ENXIO:
+            raise UserError(f"cannot write {item.label}: a FIFO that nobody reads") from None
+        raise UserError(f"cannot write {item.label}: {error.strerror or error}") from None
+    fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) & ~os.O_NONBLOCK)
+    return fd
+
+
+def _g(value: float | None) -> str:
+    return "failed" if value is None else f"{value:.6g}"
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from snakesim import _core
     from snakesim.runs.calibrate import (
-        MAX_EVALS,
         CalibrationError,
         Problem,
         calibrate,
+        check_max_evals,
         fitted_robot_yaml,
         parse_fit,
         read_log,
         read_targets,
+        short_int,
+        trajectory_error,
     )
     from snakesim.runs.calibrate import plot as draw
 
-    inputs = [p for p in (args.robot, args.targets, args.log, args.world) if p is not None]
-    outputs: list[tuple[str | Path, str]] = [(args.out, "--out")]
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    if not 1 <= workers <= 256:
+        raise UserError(f"--workers must be in [1, 256], got {short_int(workers)}")
+    if not 0 <= args.seed <= LIMITS["seed"]:
+        raise UserError(f"--seed must be in [0, {LIMITS['seed']}], got {short_int(args.seed)}")
+    image_format = None
+    if args.plot is not None:
+        suffix = Path(args.plot).suffix.lower()
+        if suffix not in PLOT_SUFFIXES:
+            raise UserError(
+                f"cannot write --plot {args.plot}: expected a {', '.join(PLOT_SUFFIXES[:-1])} or "
+                f"{PLOT_SUFFIXES[-1]} file (the format is the name's extension)"
+            )
+        image_format = suffix[1:]
+    outputs: list[tuple[str | os.PathLike, str]] = [(args.out, "--out")]
     if args.json not in (None, "-"):
         outputs.append((args.json, "--json"))
     if args.plot is not None:
         outputs.append((args.plot, "--plot"))
-    for path, flag in outputs:
-        check_writable(path, flag, inputs)
-    check_distinct(outputs)
-    if not 1 <= args.max_evals <= MAX_EVALS:
-        raise UserError(f"--max-evals must be in [1, {MAX_EVALS}], got {args.max_evals}")
-    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    if not 1 <= workers <= 256:
-        raise UserError(f"--workers must be in [1, 256], got {workers}")
     try:
         bounds = parse_fit(args.fit)
+        check_max_evals(args.max_evals, len(bounds))
+        # The robot and the world first: the files they read (the URDF a robot file names, a world's
+        # heightfield) are inputs that no output may replace.
         try:
             joints = _core.robot_joint_names(str(args.robot))
+            inputs = [*_core.robot_files(str(args.robot)), args.targets, args.log]
         except (ValueError, RuntimeError, OSError) as error:
             raise CalibrationError(f"--robot {args.robot}: {error}") from None
-        targets = read_targets(args.targets, joints)
-        log = read_log(args.log, len(joints), targets.shape[0])
-        problem = Problem(
-            robot=str(args.robot),
-            targets=targets,
-            log=log,
-            world=None if args.world is None else str(args.world),
-            start=args.start,
-        )
-        try:
-            problem.simulate({})  # the robot, the world and the start build, before any fit
-        except (ValueError, RuntimeError) as error:
-            raise CalibrationError(f"--robot {args.robot}: {error}") from None
-        quiet = args.json == "-"
-
-        def progress(simulations: int, best: float) -> None:
-            if not quiet:
-                print(f"\r{simulations} simulations, best error {best:.6g}", end="", flush=True)
-
-        result = calibrate(
-            problem, bounds, max_evals=args.max_evals, workers=workers, seed=args.seed, progress=progress
-        )
-        if not quiet:
-            print()
-        yaml_text = fitted_robot_yaml(args.robot, result["fitted"], args.out)
+        if args.world is not None:
+            try:
+                inputs += _core.world_files(str(args.world))
+            except (ValueError, RuntimeError, OSError) as error:
+                raise CalibrationError(f"--world {args.world}: {error}") from None
     except CalibrationError as error:
         raise UserError(str(error)) from None
-    result.update(robot=str(args.robot), targets=str(args.targets), log=str(args.log), world=args.world)
-    text = json.dumps(result, indent=2) + "\n"
-    try:
-        write_atomically(args.out, lambda tmp: Path(tmp).write_text(yaml_text))
-        if args.json not in (None, "-"):
-            write_atomically(args.json, lambda tmp: Path(tmp).write_text(text))
-        if args.plot is not None:
-            write_atomically(args.plot, lambda tmp: draw(tmp, problem, result["fitted"]))
-    except OSError as error:
-        raise UserError(f"cannot write {error.filename}: {error.strerror or error}") from None
+    with _Outputs(outputs, inputs) as out:
+        try:
+            targets = read_targets(args.targets, joints)
+            log = read_log(args.log, len(joints), targets.shape[0])
+            problem = Problem(
+                robot=str(args.robot),
+                targets=targets,
+                log=log,
+                world=None if args.world is None else str(args.world),
+                start=args.start,
+            )
+            try:
+                # The robot, the world and the start build, before any fit: the robot file's own error.
+                before = trajectory_error(*problem.simulate({}), problem.log)
+            except (ValueError, RuntimeError) as error:
+                raise CalibrationError(f"--robot {args.robot}: {error}") from None
+            quiet = args.json == "-"
+            shown: list[bool] = []
+
+            def progress(simulations: int, best: float) -> None:
+                if not quiet:
+                    shown[:] = [True]
+                    print(f"\r{simulations} simulations, best error {best:.6g}", end="", flush=True)
+
+            result = calibrate(
+                problem,
+                bounds,
+                max_evals=args.max_evals,
+                workers=workers,
+                seed=args.seed,
+                progress=progress,
+                error_before=before,
+            )
+            if shown:
+                print()
+            yaml_text = fitted_robot_yaml(args.robot, result["fitted"], args.out)
+        except CalibrationError as error:
+            raise UserError(str(error)) from None
+        result.update(robot=str(args.robot), targets=str(args.targets), log=str(args.log), world=args.world)
+        text = json.dumps(result, indent=2, allow_nan=False) + "\n"
+        try:
+            out.render("--out", lambda tmp: Path(tmp).write_text(yaml_text))
+            if args.json not in (None, "-"):
+                out.render("--json", lambda tmp: Path(tmp).write_text(text))
+            if args.plot is not None:
+                out.render("--plot", lambda tmp: draw(tmp, problem, result["fitted"], image_format))
+        except OSError as error:
+            raise UserError(f"cannot write {error.filename}: {error.strerror or error}") from None
+        out.commit()
     if args.json == "-":
         sys.stdout.write(text)
         return 0
     for key, value in result["fitted"].items():
         print(f"{key} = {value:.6g}")
     print(
-        f"error {result['error_before']:.6g} -> {result['error_after']:.6g} in {result['simulations']} "
+        f"error {_g(result['error_before'])} -> {_g(result['error_after'])} in {result['simulations']} "
         f"simulations, {result['wall_seconds']:.1f} s ({workers} workers)"
     )
     print(f"wrote {args.out}" + "".join(f", {p}" for p in (args.json, args.plot) if p is not None))
@@ -138,9 +316,14 @@ def add_parser(sub) -> None:
     p.add_argument("--out", required=True, metavar="FITTED.yaml", help="the fitted robot file to write")
     p.add_argument("--json", metavar="PATH", help="also write the result as JSON (- : print only JSON)")
     p.add_argument("--plot", metavar="PNG", help="a figure of the logged vs simulated path and joints")
-    p.add_argument("--seed", type=int, default=0, help="CMA-ES's seed")
+    p.add_argument("--seed", type=_integer, default=0, help="CMA-ES's seed")
     p.add_argument(
-        "--max-evals", "--budget", dest="max_evals", type=int, default=600, help="most simulations of the fit"
+        "--max-evals",
+        "--budget",
+        dest="max_evals",
+        type=_integer,
+        default=600,
+        help="most simulations of the fit",
     )
-    p.add_argument("--workers", type=int, help="processes that simulate (default: the number of cores)")
+    p.add_argument("--workers", type=_integer, help="processes that simulate (default: the number of cores)")
     p.set_defaults(func=cmd_calibrate)

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import _core
-from snakesim.files import output_kind
+from snakesim.files import is_input, output_kind
 
 
 class UserError(Exception):
@@ -40,8 +40,10 @@ def _same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
 
 def check_writable(path: str | os.PathLike, what: str = "", inputs: Iterable[str | os.PathLike] = ()) -> Path:
     """The output path, if the command can write it; UserError otherwise: its directory is missing or
-    not writable, it is a directory, a socket or a block device, or it is one of ``inputs`` (the files
-    the command reads: it would overwrite what it reads). A character device (/dev/null) or a FIFO is
+    not writable, it is a directory, a socket or a block device, or it is a file the command reads:
+    one of ``inputs`` (named, perhaps not read yet) or one it has read already
+    (:func:`snakesim.files.is_input`: the robot file and its URDF, the world and its heightfield, a
+    model and its statistics, however the path is spelled). A character device (/dev/null) or a FIFO is
     written through (snakesim.files.output_file), so it only has to be writable itself."""
     path = Path(path)
     label = f"{what} {path}" if what else str(path)
@@ -63,6 +65,9 @@ def check_writable(path: str | os.PathLike, what: str = "", inputs: Iterable[str
     for source in inputs:
         if _same_file(real, source):
             raise UserError(f"cannot write {label}: it is {os.fspath(source)}, which this command reads")
+    if is_input(real):
+        # Read already (a robot's URDF, a world's heightfield, a model's files), whatever path named it.
+        raise UserError(f"cannot write {label}: it is a file this command reads")
     return path
 
 

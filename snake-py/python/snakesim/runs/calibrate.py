@@ -17,20 +17,32 @@ with p the base position (x, y, z) and q the joint angles, POSITION_SCALE 1 cm a
 or of 0.001 rad of every joint. The joints weigh this much because they pin the motor parameters
 whatever the ground does (docs/calibration.md: without it, kp and the ground friction trade off).
 
+A candidate whose simulation fails (the engine refuses it, or its error is not finite) scores
+``math.inf``: CMA-ES ranks it last, and it is never the fit. A calibration none of whose candidates
+gives a finite error is refused (:class:`CalibrationError`), as are inputs beyond the limits of
+``snake-cli run --targets`` (``LIMITS['target_rows']`` rows, ``LIMITS['csv_bytes']``) and log values
+beyond ``LIMITS['position']``.
+
 Optimizer: CMA-ES (the ``cmaes`` package, bounded) over the fitted keys mapped to [0, 1] (linearly, or
 logarithmically where the lower bound is > 0: gains and frictions are scales), each generation's
-candidates simulated in parallel processes.
+candidates simulated in parallel processes. Every simulation can be interrupted: Ctrl-C or SIGTERM
+ends one in the main process within 20 ms (``_core.simulate_robot``), and ends the worker processes
+at once (:func:`_stop_workers`).
 """
 
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
+import io
 import json
 import math
 import multiprocessing
 import os
+import signal
 import time
-from collections.abc import Callable, Sequence
+from array import array
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,7 +50,8 @@ from typing import Any
 import numpy as np
 
 from snakesim import _core
-from snakesim.files import read_text
+from snakesim.files import open_regular, read_text
+from snakesim.limits import LIMITS
 
 #: The keys ``--fit`` takes (snake-core's ``run_targets::Overrides``).
 FIT_KEYS: tuple[str, ...] = (
@@ -62,7 +75,15 @@ MAX_EVALS = 100_000
 POSITION_SCALE = 0.01  # m
 ANGLE_SCALE = 0.001  # rad
 BASE_COLUMNS = ("step", "t", "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
-#: The error of a candidate whose simulation fails (a numerically unstable one).
+#: The physics step, s: a log and its targets have one row per step.
+DT = 1.0 / 240.0
+#: Most a log's ``t`` may differ from step x DT, s: time stamps written to the millisecond pass; a row a
+#: step early or late (4.2 ms) does not.
+T_TOLERANCE = 1e-3
+#: Longest line of a targets or log CSV, characters (a row of 137 numbers in shortest form is ~3 kB).
+LINE_CHARS = 1 << 20
+#: What CMA-ES is told of a candidate whose simulation failed (or twice the generation's largest finite
+#: error, when that is more), so that it ranks last; the candidate's own error is ``math.inf``.
 FAILED = 1e12
 
 
@@ -88,104 +109,187 @@ def parse_fit(items: Sequence[str]) -> dict[str, tuple[float, float]]:
         except ValueError:
             raise CalibrationError(f"--fit {key}: {rng!r} is not LOW:HIGH numbers") from None
         if not (math.isfinite(low) and math.isfinite(high)):
-            raise CalibrationError(f"--fit {key}: bounds must be finite, got {low}:{high}")
+            raise CalibrationError(f"--fit {key}: bounds must be finite, got {low!r}:{high!r}")
         if not low < high:
-            raise CalibrationError(f"--fit {key}: the lower bound {low} is not below the upper bound {high}")
+            raise CalibrationError(
+                f"--fit {key}: the lower bound {low!r} is not below the upper bound {high!r}"
+            )
         if low < 0:
-            raise CalibrationError(f"--fit {key}: bounds must be >= 0, got {low}:{high}")
+            raise CalibrationError(f"--fit {key}: bounds must be >= 0, got {low!r}:{high!r}")
         bounds[key] = (low, high)
     if not bounds:
         raise CalibrationError("give at least one --fit KEY=LOW:HIGH")
     return bounds
 
 
-def _numbers(cells: list[str], file: str, line: int, names: Sequence[str]) -> list[float]:
-    out = []
+def excerpt(text: str) -> str:
+    """A user's value quoted for a message: at most 24 characters, escaped."""
+    return repr(text[:24]) + ("..." if len(text) > 24 else "")
+
+
+def _numbers(cells: list[str], file: str, line: int, names: Sequence[str], bound: float) -> list[float]:
+    """The cells as floats of magnitude at most ``bound`` (any finite value for ``math.inf``)."""
+    try:
+        values = [float(c) for c in cells]
+        if all(math.isfinite(v) and abs(v) <= bound for v in values):
+            return values
+    except ValueError:
+        pass
     for name, cell in zip(names, cells):
         try:
             v = float(cell)
         except ValueError:
-            raise CalibrationError(f"{file}:{line}: {name}: {cell[:40]!r} is not a number") from None
+            raise CalibrationError(f"{file}:{line}: {name}: {excerpt(cell)} is not a number") from None
         if not math.isfinite(v):
-            raise CalibrationError(f"{file}:{line}: {name}: {cell[:40]!r} is not a finite number")
-        out.append(v)
-    return out
+            raise CalibrationError(f"{file}:{line}: {name}: {excerpt(cell)} is not a finite number")
+        if abs(v) > bound:
+            raise CalibrationError(
+                f"{file}:{line}: {name}: {excerpt(cell)} is beyond +-{bound:g} (LIMITS['position'])"
+            )
+    raise AssertionError("unreachable: some cell was refused")
 
 
-def _rows(path: str | os.PathLike, what: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
+def _lines(path: str | os.PathLike, what: str) -> Iterator[tuple[int, list[str]]]:
+    """(line number, stripped cells) of each non-blank line of a CSV, read a line at a time: a regular
+    file of at most ``LIMITS['csv_bytes']``, UTF-8, lines of at most :data:`LINE_CHARS`;
+    CalibrationError naming the file (and line) otherwise."""
     file = os.fspath(path)
     try:
-        text = read_text(path, "csv_bytes")
+        raw = open_regular(path, "csv_bytes")
     except (OSError, ValueError) as error:
         raise CalibrationError(f"{what} {file}: {getattr(error, 'strerror', None) or error}") from None
-    lines = text.splitlines()
-    if not lines:
+    cap = LIMITS["csv_bytes"]
+    with io.TextIOWrapper(raw, encoding="utf-8") as f:
+        line, read = 0, 0
+        while True:
+            try:
+                text = f.readline(LINE_CHARS)
+            except UnicodeDecodeError as error:
+                raise CalibrationError(
+                    f"{what} {file}: not UTF-8 text ({error.reason}, after line {line})"
+                ) from None
+            if not text:
+                return
+            line += 1
+            read += len(text)
+            if len(text) == LINE_CHARS and not text.endswith("\n"):
+                raise CalibrationError(f"{file}:{line}: a line longer than {LINE_CHARS:,} characters")
+            if read > cap:  # the file grew while read
+                raise CalibrationError(f"{what} {file}: more than {cap:,} bytes (LIMITS['csv_bytes'])")
+            if text.strip():
+                yield line, [c.strip() for c in text.split(",")]
+
+
+def _header(lines: Iterator[tuple[int, list[str]]], file: str) -> tuple[int, list[str]]:
+    first = next(lines, None)
+    if first is None:
         raise CalibrationError(f"{file}: empty; expected a header")
-    header = [c.strip() for c in lines[0].split(",")]
-    rows = [(i + 1, [c.strip() for c in ln.split(",")]) for i, ln in enumerate(lines) if i and ln.strip()]
-    if not rows:
-        raise CalibrationError(f"{file}: no rows after the header")
-    for line, cells in rows:
-        if len(cells) != len(header):
-            raise CalibrationError(f"{file}:{line}: {len(cells)} cells, the header has {len(header)}")
-    return header, rows
+    return first
 
 
-def _check_steps(file: str, rows: list[tuple[int, list[str]]]) -> None:
-    for k, (line, cells) in enumerate(rows, start=1):
-        if cells[0] != str(k):
-            raise CalibrationError(
-                f"{file}:{line}: step {cells[0][:20]!r}, expected {k} "
-                "(rows sorted, one per physics step, from 1)"
-            )
+def _row(file: str, line: int, cells: list[str], header: list[str], k: int) -> None:
+    """Row ``k`` (from 1) has the header's cells and step ``k``."""
+    if len(cells) != len(header):
+        raise CalibrationError(f"{file}:{line}: {len(cells)} cells, the header has {len(header)}")
+    if cells[0] != str(k):
+        raise CalibrationError(
+            f"{file}:{line}: step {excerpt(cells[0])}, expected {k} "
+            "(rows sorted, one per physics step, from 1)"
+        )
 
 
 def read_targets(path: str | os.PathLike, joints: Sequence[str]) -> np.ndarray:
-    """The targets CSV as (steps, joints) in the robot's joint order."""
+    """The targets CSV as (steps, joints) in the robot's joint order: at most
+    ``LIMITS['target_rows']`` rows of finite numbers, as ``snake-cli run --targets`` reads them
+    (refused at the first row over, before the rest is read)."""
     file = os.fspath(path)
-    header, rows = _rows(path, "--targets")
-    if header[0] != "step":
-        raise CalibrationError(f"{file}:1: the first column must be 'step'")
-    names = header[1:]
-    for n in names:
-        if n not in joints:
-            raise CalibrationError(f"{file}:1: column {n[:40]!r} is not a movable joint of the robot")
-    if sorted(names) != sorted(joints):
-        missing = [j for j in joints if j not in names]
-        raise CalibrationError(f"{file}:1: no column (or two) for joint(s) {', '.join(missing) or names}")
-    _check_steps(file, rows)
+    cap = LIMITS["target_rows"]
+    values = array("d")
+    with contextlib.closing(_lines(path, "--targets")) as lines:
+        first, header = _header(lines, file)
+        if header[0] != "step":
+            raise CalibrationError(f"{file}:{first}: the first column must be 'step'")
+        names = header[1:]
+        for n in names:
+            if n not in joints:
+                raise CalibrationError(
+                    f"{file}:{first}: column {excerpt(n)} is not a movable joint of the robot"
+                )
+        if sorted(names) != sorted(joints):
+            missing = [j for j in joints if j not in names]
+            raise CalibrationError(
+                f"{file}:{first}: no column (or two) for joint(s) {', '.join(missing) or names}"
+            )
+        k = 0
+        for line, cells in lines:
+            k += 1
+            if k > cap:
+                raise CalibrationError(
+                    f"{file}:{line}: more than {cap:,} rows (LIMITS['target_rows']: an hour of 1/240 s "
+                    "steps, as snake-cli run --targets)"
+                )
+            _row(file, line, cells, header, k)
+            values.extend(_numbers(cells[1:], file, line, names, math.inf))
+    if k == 0:
+        raise CalibrationError(f"{file}: no rows after the header")
+    data = np.frombuffer(values, dtype=np.float64).reshape(k, len(names))
     order = [names.index(j) for j in joints]
-    data = np.array([_numbers(c[1:], file, ln, names) for ln, c in rows], dtype=np.float64)
     return np.ascontiguousarray(data[:, order])
 
 
 def read_log(path: str | os.PathLike, joints: int, steps: int) -> np.ndarray:
-    """The logged trajectory as (steps, 7 + joints): base x, y, z, qx, qy, qz, qw, then the joints."""
+    """The logged trajectory as (steps, 7 + joints): base x, y, z, qx, qy, qz, qw, then the joints.
+    Row k is step k at ``t`` = k/240 s (within :data:`T_TOLERANCE`), every value at most
+    ``LIMITS['position']`` in magnitude; a row past ``steps`` is refused before the rest is read."""
     file = os.fspath(path)
-    header, rows = _rows(path, "--log")
+    bound = float(LIMITS["position"])
+    values = array("d")
     expected = [*BASE_COLUMNS, *(f"q{j}" for j in range(joints))]
-    if header != expected:
-        q = sum(1 for h in header if h.startswith("q") and h[1:].isdigit())
-        if header[: len(BASE_COLUMNS)] == list(BASE_COLUMNS) and q != joints:
-            raise CalibrationError(f"{file}:1: {q} joint columns, the robot has {joints} movable joints")
-        raise CalibrationError(
-            f"{file}:1: expected the header {','.join(expected[:10])},... (snake-cli run --output)"
-        )
-    _check_steps(file, rows)
-    if len(rows) != steps:
-        raise CalibrationError(f"{file}: {len(rows)} rows, the targets have {steps} (one per physics step)")
-    data = np.array([_numbers(c[2:], file, ln, header[2:]) for ln, c in rows], dtype=np.float64)
-    return data
+    with contextlib.closing(_lines(path, "--log")) as lines:
+        first, header = _header(lines, file)
+        if header != expected:
+            q = sum(1 for h in header if h.startswith("q") and h[1:].isdigit())
+            if header[: len(BASE_COLUMNS)] == list(BASE_COLUMNS) and q != joints:
+                raise CalibrationError(
+                    f"{file}:{first}: {q} joint columns, the robot has {joints} movable joints"
+                )
+            raise CalibrationError(
+                f"{file}:{first}: expected the header {','.join(expected[:10])},... (snake-cli run --output)"
+            )
+        names = header[2:]
+        k = 0
+        for line, cells in lines:
+            k += 1
+            if k > steps:
+                raise CalibrationError(
+                    f"{file}:{line}: more than {steps} rows, the targets have {steps} (one per physics step)"
+                )
+            _row(file, line, cells, header, k)
+            try:
+                t = float(cells[1])
+            except ValueError:
+                raise CalibrationError(f"{file}:{line}: t: {excerpt(cells[1])} is not a number") from None
+            if not abs(t - k * DT) <= T_TOLERANCE:
+                raise CalibrationError(
+                    f"{file}:{line}: t: {excerpt(cells[1])}, expected step {k} x 1/240 s = {k * DT:.6g} s "
+                    "(one row per physics step, t = 0 at the first command)"
+                )
+            values.extend(_numbers(cells[2:], file, line, names, bound))
+    if k != steps:
+        raise CalibrationError(f"{file}: {k} rows, the targets have {steps} (one per physics step)")
+    return np.frombuffer(values, dtype=np.float64).reshape(k, len(names))
 
 
 def trajectory_error(base: np.ndarray, joints: np.ndarray, log: np.ndarray) -> float:
-    """The normalised error of a simulated run against the log (the module's docstring)."""
-    dp = base[:, :3] - log[:, :3]
-    dq = joints - log[:, 7:]
-    value = float(np.mean(np.sum(dp * dp, axis=1)) / POSITION_SCALE**2)
-    if dq.size:
-        value += float(np.mean(dq * dq) / ANGLE_SCALE**2)
-    return value if math.isfinite(value) else FAILED
+    """The normalised error of a simulated run against the log (the module's docstring); ``math.inf``
+    when it is not finite (a run that blew up, an error that overflows)."""
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is a failed candidate, not a warning
+        dp = base[:, :3] - log[:, :3]
+        dq = joints - log[:, 7:]
+        value = float(np.mean(np.sum(dp * dp, axis=1)) / POSITION_SCALE**2)
+        if dq.size:
+            value += float(np.mean(dq * dq) / ANGLE_SCALE**2)
+    return value if math.isfinite(value) else math.inf
 
 
 @dataclass
@@ -205,10 +309,11 @@ class Problem:
         )
 
     def error(self, values: dict[str, float]) -> float:
+        """The candidate's error; ``math.inf`` for one whose simulation fails."""
         try:
             base, joints = self.simulate(values)
         except RuntimeError:  # the engine failed (an unstable candidate)
-            return FAILED
+            return math.inf
         return trajectory_error(base, joints, self.log)
 
 
@@ -249,17 +354,58 @@ class Space:
         return out
 
 
+def population_size(keys: int) -> int:
+    """Candidates per CMA-ES generation when fitting ``keys`` keys (its default, 4 + 3 ln n, and at
+    least 8): the fewest simulations a fit makes."""
+    return max(8, 4 + int(3 * math.log(keys)))
+
+
+def check_max_evals(max_evals: int, keys: int) -> None:
+    """CalibrationError unless ``max_evals`` holds at least one generation of candidates for ``keys``
+    fitted keys, and at most :data:`MAX_EVALS`."""
+    population = population_size(keys)
+    if max_evals > MAX_EVALS:
+        raise CalibrationError(f"--max-evals must be at most {MAX_EVALS:,}, got {short_int(max_evals)}")
+    if max_evals < population:
+        raise CalibrationError(
+            f"--max-evals {short_int(max_evals)} is less than one generation: fitting {keys} key(s) "
+            f"simulates {population} candidates a generation; give --max-evals {population} or more"
+        )
+
+
+def short_int(value: int) -> str:
+    """An integer for a message, short whatever its size (``1e+40`` for forty digits)."""
+    text = str(value)
+    digits = text.lstrip("-")
+    return text if len(digits) <= 15 else f"{text[: len(text) - len(digits) + 1]}e+{len(digits) - 1}"
+
+
 _WORKER: Problem | None = None
 
 
 def _init_worker(problem: Problem) -> None:
     global _WORKER
     _WORKER = problem
+    # Ctrl-C reaches the whole process group: the main process answers it and ends the workers
+    # (_stop_workers), which would otherwise each print a traceback.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _worker_error(values: dict[str, float]) -> float:
     assert _WORKER is not None
     return _WORKER.error(values)
+
+
+def _stop_workers(pool: concurrent.futures.ProcessPoolExecutor) -> None:
+    """Ends the pool's processes now, in the middle of their simulations (after Ctrl-C, SIGTERM or an
+    error): ``shutdown()`` alone waits for each to finish its candidate, minutes for a long log."""
+    # Python 3.14 has ProcessPoolExecutor.terminate_workers(); before it, the pool's own table.
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.terminate()
+    for process in processes:
+        process.join(5)
 
 
 def calibrate(
@@ -271,13 +417,16 @@ def calibrate(
     seed: int = 0,
     tolerance: float = 1e-3,
     progress: Callable[[int, float], None] | None = None,
+    error_before: float | None = None,
 ) -> dict[str, Any]:
     """Fits ``bounds``' keys with CMA-ES; returns the JSON result (``fitted``, ``error_before`` (the
-    robot file's own values), ``error_after``, ``simulations``, ``wall_seconds``, ``bounds``, ...)."""
+    robot file's own values: ``error_before`` if given, else simulated; None when not finite),
+    ``error_after``, ``simulations``, ``failed_simulations``, ``wall_seconds``, ``bounds``, ...), whose
+    numbers are all finite. CalibrationError when ``max_evals`` is below one generation, or when no
+    candidate gives a finite error."""
     from cmaes import CMA
 
-    if not 1 <= max_evals <= MAX_EVALS:
-        raise CalibrationError(f"--max-evals must be in [1, {MAX_EVALS}], got {max_evals}")
+    check_max_evals(max_evals, len(bounds))
     clock = time.monotonic()
     check_bounds(problem, bounds)
     space = Space(bounds)
@@ -287,10 +436,11 @@ def calibrate(
         sigma=0.3,
         bounds=np.array([[0.0, 1.0]] * dim),
         seed=seed,
-        population_size=max(8, 4 + int(3 * math.log(dim))),
+        population_size=population_size(dim),
     )
-    error_before = problem.error({})
-    simulations = 1
+    if error_before is None:
+        error_before = problem.error({})
+    simulations, failed = 1, 0
     best_x, best_error = np.full(dim, 0.5), math.inf
     generations = 0
     pool = None
@@ -313,25 +463,41 @@ def calibrate(
             )
             simulations += n
             generations += 1
-            optimizer.tell(list(zip(xs, errors)))
-            k = int(np.argmin(errors))
-            if errors[k] < best_error:
-                best_x, best_error = xs[k], errors[k]
+            finite = [e for e in errors if math.isfinite(e)]
+            failed += n - len(finite)
+            # A failed candidate ranks last; its error is never the fit's.
+            last = min(max([FAILED, *(2 * e for e in finite)]), np.finfo(np.float64).max)
+            optimizer.tell([(x, e if math.isfinite(e) else last) for x, e in zip(xs, errors)])
+            if finite:
+                k = int(np.argmin(errors))
+                if errors[k] < best_error:
+                    best_x, best_error = xs[k], errors[k]
             if progress:
                 progress(simulations, best_error)
             # Converged: the generation's candidates all lie within `tolerance` (of [0, 1]) of each other.
             spread = float(np.max(np.ptp(np.array(xs), axis=0)))
             if optimizer.should_stop() or spread < tolerance:
                 break
+    except BaseException:
+        if pool:
+            _stop_workers(pool)
+            pool = None
+        raise
     finally:
         if pool:
             pool.shutdown(cancel_futures=True)
+    if not math.isfinite(best_error):
+        raise CalibrationError(
+            f"no fit: every one of the {failed} candidates' simulations failed (the physics blew up, or "
+            "the error against the log is not finite); check the log, the targets and the --fit bounds"
+        )
     fitted = space.to_values(best_x)
     return {
         "fitted": fitted,
-        "error_before": error_before,
+        "error_before": error_before if math.isfinite(error_before) else None,
         "error_after": best_error,
         "simulations": simulations,
+        "failed_simulations": failed,
         "generations": generations,
         "wall_seconds": time.monotonic() - clock,
         "bounds": {k: list(v) for k, v in bounds.items()},
@@ -396,8 +562,11 @@ def fitted_robot_yaml(robot: str | os.PathLike, fitted: dict[str, float], out: s
     return "\n".join(lines) + "\n"
 
 
-def plot(path: str | os.PathLike, problem: Problem, fitted: dict[str, float]) -> None:
-    """Logged vs simulated (before and after the fit): the base path from above and every joint."""
+def plot(
+    path: str | os.PathLike, problem: Problem, fitted: dict[str, float], image_format: str | None = None
+) -> None:
+    """Logged vs simulated (before and after the fit): the base path from above and every joint, as
+    ``image_format`` (``png``, ``pdf``, ``svg``; default: by the name's extension)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -420,5 +589,5 @@ def plot(path: str | os.PathLike, problem: Problem, fitted: dict[str, float]) ->
     bx.set(xlabel="t (s)", ylabel="joint angle (rad)", title=f"joints (first {min(joints, 4)} of {joints})")
     bx.legend(fontsize="small", ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    fig.savefig(path, dpi=100, format=image_format)
     plt.close(fig)

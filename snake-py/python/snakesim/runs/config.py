@@ -51,7 +51,7 @@ from typing import Any
 
 from snakesim import _core
 from snakesim.envs.config import plain
-from snakesim.files import FileError, read_text, write_atomically
+from snakesim.files import FileError, read_text, rewrite_atomically
 
 #: Every key with its default, from Rust.
 DEFAULTS: dict[str, Any] = json.loads(_core.run_config_defaults())
@@ -165,7 +165,7 @@ def dump(config: Mapping[str, Any]) -> str:
 def save(config: Mapping[str, Any], path: str | os.PathLike) -> None:
     """Writes config.yaml whole (readers of a run being trained never see half of it)."""
     text = dump(config)
-    write_atomically(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+    rewrite_atomically(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def parse_set(items: list[str]) -> dict[str, Any]:

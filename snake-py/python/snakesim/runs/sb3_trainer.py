@@ -44,7 +44,7 @@ from snakesim.agents.loading import (
     safe_custom_objects,
 )
 from snakesim.envs.config import env_file_records
-from snakesim.files import open_regular, read_text, write_atomically
+from snakesim.files import open_regular, read_text, rewrite_atomically
 from snakesim.runs import config as runconfig
 from snakesim.runs import rundir
 from snakesim.runs.results import TrainingInterrupted, TrainResult, format_eval
@@ -257,7 +257,7 @@ class Trainer:
                     )
                     self.log(f"note: resuming with other versions than the run started with: {current}")
                 versions = recorded
-            write_atomically(
+            rewrite_atomically(
                 versions_path, lambda tmp: Path(tmp).write_text(json.dumps(versions, indent=2) + "\n")
             )
             self._prepare_evaluations()
@@ -293,7 +293,7 @@ class Trainer:
                 writer.writerow(EVAL_FIELDS)
                 writer.writerows(rows)
 
-        write_atomically(path, write)
+        rewrite_atomically(path, write)
 
     def _append_evaluation(self, row: Mapping[str, Any]) -> None:
         with open(self.run_dir / EVALUATIONS_FILE, "a", newline="", encoding="utf-8") as f:
@@ -417,7 +417,7 @@ class Trainer:
         model_path, stats_path = rundir.checkpoint_paths(self.run_dir, timesteps)
         self._save_model(model_path, stats_path)
         meta = {"timesteps": timesteps, "wall_time": self.wall_time(), "reason": reason}
-        write_atomically(
+        rewrite_atomically(
             model_path.with_suffix(".json"), lambda tmp: Path(tmp).write_text(json.dumps(meta) + "\n")
         )
         return model_path
@@ -425,10 +425,10 @@ class Trainer:
     def _save_model(self, model_path: Path, stats_path: Path) -> None:
         """The model zip and, with ``normalize``, its statistics, each written whole (readers may be
         loading them while we train)."""
-        write_atomically(model_path, self.model.save)
+        rewrite_atomically(model_path, self.model.save)
         normalizer = self.model.get_vec_normalize_env()
         if normalizer is not None:
-            write_atomically(stats_path, normalizer.save)
+            rewrite_atomically(stats_path, normalizer.save)
 
     def _save_final(self) -> Path:
         path = self.run_dir / rundir.MODEL_FILE

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import _core
-from snakesim.files import FileError, read_text, write_atomically
+from snakesim.files import FileError, read_text, rewrite_atomically
 from snakesim.limits import LIMITS
 from snakesim.runs import config as runconfig
 from snakesim.runs import rundir
@@ -261,7 +261,7 @@ def start_folder(out: Path, manifest: Mapping[str, Any]):
 def write_manifest(out: Path, manifest: Mapping[str, Any]) -> None:
     out.mkdir(exist_ok=True)
     text = json.dumps(manifest, indent=2) + "\n"
-    write_atomically(out / MANIFEST_FILE, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+    rewrite_atomically(out / MANIFEST_FILE, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def new_manifest(kind: str, trials: Sequence[Trial], **fields: Any) -> dict[str, Any]:
