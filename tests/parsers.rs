@@ -307,8 +307,15 @@ fn a_bad_max_velocity_is_one_line_naming_the_file_and_key() {
         ] {
             let e = load(&body).expect_err(&body).to_string();
             assert!(!e.contains('\n'), "{body}: {e}");
+            // A non-finite number is refused where the YAML is read, naming its key path (issue 57:
+            // one check for every number of every file).
+            let (key, expected) = if value.contains("nan") || value.contains("inf") {
+                (key.replace(": ", "."), "must be a finite number, got ")
+            } else {
+                (key.to_owned(), "must be in (0, ")
+            };
             assert!(
-                e.contains("servo.yaml: ") && e.contains(key) && e.contains("must be in (0, "),
+                e.contains("servo.yaml: ") && e.contains(&key) && e.contains(expected),
                 "{body}: {e}"
             );
         }
@@ -386,4 +393,57 @@ proptest! {
             keys.iter().zip(&values).map(|(k, v)| format!("\"{k}\": {v:e}")).collect();
         checks::fit_overrides(format!("{{{}}}", fields.join(", ")).as_bytes());
     }
+}
+
+/// Issue 57's regressions, kept in fuzz/regressions/: a non-finite YAML number is refused naming its
+/// key path (serde would read it as "not given" and drop the setting), a password line is not quoted,
+/// and a randomize scale that cannot build is refused before any reset.
+#[test]
+fn non_finite_numbers_password_lines_and_unbuildable_scales_are_refused() {
+    let read = |target: &str, name: &str| {
+        std::fs::read_to_string(format!("{ROOT}/fuzz/regressions/{target}/{name}")).unwrap()
+    };
+    let config = snake_rl::config::parse_yaml(&read("run_config", "non-finite-yaml.yaml"));
+    let e = config.unwrap_err().0;
+    assert!(e.contains("must be a finite number, got .nan"), "{e}");
+    let dir = std::env::temp_dir().join(format!("snakesim-parsers-57-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, expected) in [
+        (
+            "non-finite-friction.yaml",
+            "ground_friction: must be a finite number, got .nan",
+        ),
+        (
+            "password-line.yaml",
+            "unknown field <78 characters, not shown>",
+        ),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, read("world_file", name)).unwrap();
+        let e = snake_core::WorldSpec::load(&path).unwrap_err().to_string();
+        assert!(e.contains(expected) && !e.contains("$6$"), "{e}");
+    }
+    std::fs::write(
+        dir.join("x.urdf"),
+        include_str!("../robots/paper-cubes-5.urdf"),
+    )
+    .unwrap();
+    let robot = dir.join("r.yaml");
+    std::fs::write(&robot, read("robot_file", "non-finite-motors.yaml")).unwrap();
+    let e = snake_core::RobotSpec::load(&robot).unwrap_err().to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        e.contains("motors.kd: must be a finite number, got .inf"),
+        "{e}"
+    );
+    let keywords: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_str(&read("env_keywords", "randomize-scale-1e-300.json")).unwrap();
+    let e = snake_rl::config::env_from_keywords(&keywords).map_or_else(
+        |e| e.0,
+        |config| snake_core::SnakeEnv::new(config).unwrap_err().to_string(),
+    );
+    assert!(
+        e.contains("randomize.mass_scale: must lie within 0.01 <= low <= high <= 100, got [1e-300, 1e-300]"),
+        "{e}"
+    );
 }

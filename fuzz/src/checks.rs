@@ -19,6 +19,16 @@ fn one_line(message: &str) {
         !message.contains('\n'),
         "an error message of several lines: {message}"
     );
+    // Numbers in errors are short (1e300, not Rust's 301 digits), so no line is cut inside one.
+    let longest_digits = message
+        .split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(
+        longest_digits <= 40,
+        "an error message with a number of {longest_digits} digits: {message}"
+    );
 }
 
 /// A model or checkpoint file (safetensors: header, metadata, tensors), as `snakesim evaluate` and

@@ -212,7 +212,8 @@ fn bad_skin_input_is_one_line_and_writes_nothing() {
                 "nan.yaml",
                 "skin_friction: {forward: 0.1, backward: .nan, transverse: 0.3}",
             )),
-            "nan.yaml: skin_friction: backward must be finite and in [0, 10], got NaN",
+            // Refused where the YAML is read (issue 57), naming the key path.
+            "nan.yaml: skin_friction.backward: must be a finite number, got .nan",
         ),
         (
             with_file(robot(
