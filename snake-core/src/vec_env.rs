@@ -266,11 +266,28 @@ impl VecSnakeEnv {
     /// Resets every env: env `i` gets the seed `seed + i` (wrapping), or continues its stream with
     /// `None`. Writes the `M * D` first observations into `obs_out`.
     pub fn reset(&mut self, seed: Option<u64>, obs_out: &mut [f32]) -> Result<()> {
+        self.reset_with(|i| seed.map(|s| s.wrapping_add(i as u64)), obs_out)
+    }
+
+    /// Resets every env with a seed of its own: env `i` gets `seeds[i]`, or continues its stream
+    /// where that is `None` (Gymnasium's vector envs take a list of seeds so). `seeds` holds `M`
+    /// values; writes the `M * D` first observations into `obs_out`.
+    pub fn reset_each(&mut self, seeds: &[Option<u64>], obs_out: &mut [f32]) -> Result<()> {
+        check_len("seeds", seeds.len(), self.num_envs())?;
+        self.reset_with(|i| seeds[i], obs_out)
+    }
+
+    /// Resets every env, env `i` with the seed `seed_of(i)`.
+    fn reset_with(
+        &mut self,
+        seed_of: impl Fn(usize) -> Option<u64> + Sync,
+        obs_out: &mut [f32],
+    ) -> Result<()> {
         let d = self.observation_dim();
         check_len("obs_out", obs_out.len(), self.num_envs() * d)?;
         let job = |i: usize, slot: &mut Slot, obs: &mut [f32]| {
             slot.finished = false;
-            let seed = seed.map(|s| s.wrapping_add(i as u64));
+            let seed = seed_of(i);
             match slot.env.reset_into(seed, ResetOptions::default(), obs) {
                 Ok(info) => slot.info = Some(info),
                 Err(e) => slot.error = Some(e),

@@ -216,6 +216,38 @@ fn reset_seeds_env_i_with_seed_plus_i() {
 }
 
 #[test]
+fn reset_each_seeds_each_env_with_its_own_seed() {
+    // Env i with seeds[i]; None continues env i's stream, as a reset without a seed does.
+    let mut envs = VecSnakeEnv::new(config(), 3).unwrap();
+    let d = envs.observation_dim();
+    let mut obs = vec![0.0; 3 * d];
+    envs.reset(Some(10), &mut obs).unwrap();
+    envs.reset_each(&[Some(7), None, Some(u64::MAX)], &mut obs)
+        .unwrap();
+    let mut middle = SnakeEnv::new(config()).unwrap();
+    middle.reset(Some(11), ResetOptions::default()).unwrap();
+    let expected = [
+        SnakeEnv::new(config())
+            .unwrap()
+            .reset(Some(7), ResetOptions::default()),
+        middle.reset(None, ResetOptions::default()),
+        SnakeEnv::new(config())
+            .unwrap()
+            .reset(Some(u64::MAX), ResetOptions::default()),
+    ];
+    for (i, single) in expected.into_iter().enumerate() {
+        let (o, info) = single.unwrap();
+        assert_eq!(&obs[i * d..(i + 1) * d], &o[..], "env {i}");
+        assert_eq!(envs.info(i).unwrap().start, info.start, "env {i}");
+    }
+    let err = envs.reset_each(&[Some(1), Some(2)], &mut obs).unwrap_err();
+    assert!(
+        err.to_string().contains("seeds must have 3 values, got 2"),
+        "{err}"
+    );
+}
+
+#[test]
 fn bad_input_fails_before_any_env_moves() {
     let mut envs = VecSnakeEnv::new(EnvConfig::snakebot_gym(4), 2).unwrap();
     let (n, d) = (envs.action_dim(), envs.observation_dim());

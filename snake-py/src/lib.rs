@@ -413,6 +413,20 @@ impl VecEnv {
         Ok(PyArray1::from_vec(py, obs).reshape([m, d])?.into_any())
     }
 
+    /// reset_each(seeds) -> obs of shape (num_envs, observation_dim); env i is seeded with seeds[i]
+    /// (None: it continues its stream). `seeds` holds num_envs values.
+    fn reset_each<'py>(
+        &self,
+        py: Python<'py>,
+        seeds: Vec<Option<u64>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (m, d) = (self.dims.0, self.dims.2);
+        let mut obs = vec![0.0f32; m * d];
+        self.with(py, |envs| envs.reset_each(&seeds, &mut obs))
+            .map_err(to_py)?;
+        Ok(PyArray1::from_vec(py, obs).reshape([m, d])?.into_any())
+    }
+
     /// step(actions (num_envs, joints)) -> (obs, rewards, terminated, truncated, finals), where finals
     /// lists (env index, final observation, final info) for each episode that ended and was reset.
     fn step<'py>(

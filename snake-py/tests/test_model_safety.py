@@ -5,10 +5,12 @@ SIGTERM unwinds, and every error is one line."""
 from __future__ import annotations
 
 import base64
+import copyreg
 import io
 import json
 import os
 import pickle
+import re
 import signal
 import stat
 import subprocess
@@ -528,3 +530,459 @@ def test_error_lines_are_capped(tmp_path, capsys):
     assert line.startswith("snakesim evaluate: error: ") and line.endswith(
         "(expected a run directory or a model .zip)"
     )
+
+
+# -- issue 57: statistics within bounds ------------------------------------------------------------------
+class Call:
+    """Pickled as a call of ``func`` with ``args`` (REDUCE): what a crafted file asks of what it names."""
+
+    def __init__(self, func, *args) -> None:
+        self.func, self.args = func, args
+
+    def __reduce__(self):
+        return (self.func, self.args)
+
+
+_RESTORED: dict[int, tuple] = {}
+
+
+def restored(cls, state):
+    """An instance of ``cls`` that pickles as one restored from ``state`` (NEWOBJ, then BUILD), as a
+    saved object is: what a crafted file can make of an allowed class."""
+    obj = cls.__new__(cls)
+    _RESTORED[id(obj)] = (obj, state)  # kept, so that its id is not reused
+    return obj
+
+
+class _Crafting(pickle.Pickler):
+    def reducer_override(self, obj):
+        if id(obj) in _RESTORED:
+            return (copyreg.__newobj__, (type(obj),), _RESTORED[id(obj)][1])
+        return NotImplemented
+
+
+def crafted(obj, protocol: int = 4) -> bytes:
+    buffer = io.BytesIO()
+    _Crafting(buffer, protocol=protocol).dump(obj)
+    return buffer.getvalue()
+
+
+def bounded_child(code: str, *args, timeout=120) -> subprocess.CompletedProcess:
+    """``code`` in a Python child whose address space may grow by at most 2 GiB once snakesim, SB3 and
+    torch are imported (a statistics file asking for more fails there, not on this machine); it
+    prints, last, how much its peak resident memory grew (MiB)."""
+    prologue = (
+        "import resource, sys\n"
+        "import snakesim.agents.loading, snakesim.cli.app, stable_baselines3.common.vec_env, torch\n"
+        "torch.set_num_threads(1)\n"
+        "size = int(open('/proc/self/statm').read().split()[0]) * resource.getpagesize()\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (size + (2 << 30), resource.RLIM_INFINITY))\n"
+        "before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+    )
+    epilogue = "\nprint((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) // 1024)\n"
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "MALLOC_ARENA_MAX": "2"}
+    return subprocess.run(
+        [sys.executable, "-c", prologue + code + epilogue, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+    )
+
+
+def test_a_tiny_statistics_file_cannot_allocate_gigabytes(exported, tmp_path):
+    """The issue's case: a VecNormalize pickle of a few dozen bytes holding RunningMeanStd(1e-4, (N,)),
+    N = 3e8, allocated 3 GB before any check. Now `snakesim evaluate` refuses it in one line, the
+    peak memory barely moves, and the library says the same."""
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    model = tmp_path / "m.zip"
+    model.write_bytes(exported.read_bytes())
+    stats = tmp_path / "m_vecnormalize.pkl"
+    stats.write_bytes(crafted(Call(RunningMeanStd, 1e-4, (300_000_000,))))
+    assert len(stats.read_bytes()) < 100
+    nested = tmp_path / "n.zip"
+    nested.write_bytes(exported.read_bytes())
+    (tmp_path / "n_vecnormalize.pkl").write_bytes(
+        crafted(restored(VecNormalize, {"obs_rms": Call(RunningMeanStd, 1e-4, (300_000_000,))}))
+    )
+    done = bounded_child(
+        "code = snakesim.cli.app.main(['evaluate', sys.argv[1], '--episodes', '1'])\n"
+        "try:\n"
+        "    snakesim.agents.load_agent(sys.argv[2])\n"
+        "except snakesim.agents.AgentError as error:\n"
+        "    print(error)\n"
+        "print(code)",
+        model,
+        nested,
+    )
+    *printed, code, grew = done.stdout.splitlines()
+    assert code == "1" and done.returncode == 0, done.stderr
+    refusal = (
+        "refused: the pickle builds RunningMeanStd of shape (300000000,): more than the model's 20 "
+        "observations"
+    )
+    assert done.stderr == f"snakesim evaluate: error: {stats}: {refusal}\n"
+    assert printed == [f"{tmp_path / 'n_vecnormalize.pkl'}: {refusal}"]
+    assert int(grew) < 200, f"peak memory grew by {grew} MiB"
+
+
+def test_a_statistics_file_refuses_each_way_to_ask_too_much(tmp_path):
+    """Variants: each allowed callable asked for gigabytes, or for what a VecNormalize file never
+    holds (objects, a dtype whose state makes its size 10 GB, a class changed, a stack-deep key), and the
+    two steps of the C unpickler that allocate what a few bytes state (BYTEARRAY8's length, a
+    LONG_BINPUT's memo index). Each is refused before it allocates, in a child that could not
+    allocate 2 GiB more anyway."""
+    import struct
+
+    from gymnasium.spaces import Box
+    from numpy._core.multiarray import _reconstruct, scalar
+    from numpy.random import PCG64, SeedSequence
+    from numpy.random._pickle import __generator_ctor as generator_ctor
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    n = 300_000_000
+
+    class Dtype:  # numpy.dtype("V8") given the state of a structured dtype of objects, 10 GB each
+        def __reduce__(self):
+            state = (3, "|", None, ("a",), {"a": (np.dtype("O"), 0)}, 10**10, 1, 27)
+            return (np.dtype, ("V8", False, True), state)
+
+    class Flags:  # float64 with the flag that says it holds objects
+        def __reduce__(self):
+            return (np.dtype, ("f8", False, True), (3, "<", None, None, None, -1, -1, 1))
+
+    class ArrayState:  # an empty array given the state of 2.4 GB
+        def __reduce__(self):
+            return (_reconstruct, (np.ndarray, (0,), b"b"), (1, (n,), np.dtype("f8"), False, b"\0" * 8))
+
+    shared = b"\0" * (1 << 20)
+
+    class Swapped:  # one MiB of bytes, made into many big-endian arrays (copies) through the memo
+        def __reduce__(self):
+            return (_reconstruct, (np.ndarray, (0,), b"b"), (1, (1 << 17,), np.dtype(">f8"), False, shared))
+
+    cases = {
+        "box": (
+            crafted(Call(Box, 0.0, 1.0, (n,))),
+            "builds Box of shape (300000000,): more than the model's 20",
+        ),
+        "rms_int": (crafted(Call(RunningMeanStd, 1e-4, n)), "builds RunningMeanStd of shape (300000000,)"),
+        "rms_shape": (
+            crafted(Call(RunningMeanStd, 1e-4, "x" * 9)),
+            "gives RunningMeanStd the shape 'xxxxxxxxx'",
+        ),
+        "vecnormalize": (crafted(Call(VecNormalize, None)), "builds VecNormalize from arguments"),
+        "ndarray": (
+            crafted(Call(np.ndarray, (n,), "f8")),
+            "builds ndarray of shape (300000000,) (2,400,000,000 bytes)",
+        ),
+        "reconstruct": (
+            crafted(Call(_reconstruct, np.ndarray, (n, 8), b"b")),
+            "(2,400,000,000 bytes): more array data",
+        ),
+        "array_state": (crafted(ArrayState()), "a numpy array of shape (300000000,) (2,400,000,000 bytes)"),
+        "swapped": (
+            crafted([Swapped()] * 1 + [Swapped() for _ in range(20)]),
+            "more array data than a statistics file holds (16 MiB",
+        ),
+        "objects": (
+            crafted(Call(scalar, np.dtype("O"), None)),
+            "the dtype 'object', which a VecNormalize file does not hold",
+        ),
+        "dtype_state": (crafted(Dtype()), "the dtype '|V8', which a VecNormalize file does not hold"),
+        "dtype_flags": (crafted(Flags()), "gives a numpy dtype the state (3, '<', None, None, ..."),
+        "generator": (
+            crafted(Call(generator_ctor, n, np.ndarray)),
+            "calls __generator_ctor with <class 'numpy.ndarray'>",
+        ),
+        "seed": (
+            crafted(Call(SeedSequence, 1 << 100)),
+            "calls SeedSequence, which a VecNormalize file restores",
+        ),
+        "pcg": (crafted(Call(PCG64, 1)), "calls PCG64, which a VecNormalize file restores from its state"),
+        "class_attribute": (
+            b"\x80\x04\x8c)stable_baselines3.common.running_mean_std\x8c\x0eRunningMeanStd\x93N}\x8c\x06update"
+            b"\x8c\x01xs\x86b.",
+            "sets the state of <class 'st...ngMeanStd'>",
+        ),
+        "dunder": (
+            crafted(restored(RunningMeanStd, {"__class__": Box})),
+            "sets attributes of RunningMeanStd",
+        ),
+        "deep_key": (b"\x80\x04}N" + b"\x85" * 1_000 + b"Ns.", "keys a dict by (((...),),)"),
+        "sets": (b"\x80\x04(" + b"\x8f" * 1_100_000 + b"l.", "takes more than 1,000,000 steps"),
+        "bytearray8": (
+            b"\x80\x05\x96" + struct.pack("<Q", 3 << 30) + b"x.",
+            "!is not a VecNormalize pickle: UnpicklingError: a bytearray of 3,221,225,472 bytes in a file "
+            "of 13",
+        ),
+        "memo": (b"\x80\x04Nr" + struct.pack("<I", 2_000_000_000) + b"\x8c\x01x.", None),
+        "exec": (crafted(Call(exec, "1")), "names builtins.exec, which a VecNormalize file does not hold"),
+    }
+    for name, (data, _) in cases.items():
+        (tmp_path / f"{name}.pkl").write_bytes(data)
+    done = bounded_child(
+        "import json, pathlib\n"
+        "from snakesim.agents.loading import AgentError, load_normalizer\n"
+        "out = {}\n"
+        "for path in sorted(pathlib.Path(sys.argv[1]).glob('*.pkl')):\n"
+        "    try:\n"
+        "        out[path.stem] = type(load_normalizer(path, 20)).__name__\n"
+        "    except AgentError as error:\n"
+        "        out[path.stem] = str(error)\n"
+        "print(json.dumps(out))",
+        tmp_path,
+    )
+    assert done.returncode == 0, done.stderr
+    results, grew = json.loads(done.stdout.splitlines()[0]), int(done.stdout.splitlines()[1])
+    for name, (_, message) in cases.items():
+        got = results[name]
+        if message is None:  # Python's unpickler keeps its memo in a dict: a far index costs nothing
+            assert got.endswith("is not a VecNormalize pickle (it holds str)"), got
+        elif message.startswith("!"):  # not a pickle: the C unpickler allocated the length it states
+            assert got == f"{tmp_path / name}.pkl {message[1:]}", got
+        else:
+            assert got.startswith(f"{tmp_path / name}.pkl: refused: the pickle ") and message in got, (
+                name,
+                got,
+            )
+        assert "\n" not in got and len(got) < 300, got
+    assert grew < 500, f"peak memory grew by {grew} MiB"  # a million sets are in it: 216 bytes each
+
+
+def _statistics_of(normalizer) -> dict:
+    rms = normalizer.obs_rms
+    return {
+        "mean": rms.mean.tolist(),
+        "var": rms.var.tolist(),
+        "count": float(rms.count),
+        "returns": float(normalizer.ret_rms.var),
+        "clip": normalizer.clip_obs,
+        "epsilon": normalizer.epsilon,
+        "old_obs": np.asarray(normalizer.old_obs).tolist(),
+        "spaces": [str(normalizer.observation_space), str(normalizer.action_space)],
+        "rng": normalizer.observation_space.np_random.bit_generator.state,
+    }
+
+
+@pytest.mark.parametrize("protocol", [3, 4, 5])
+def test_real_statistics_load_as_sb3_loads_them(protocol, tmp_path):
+    """What must still load, as SB3's own VecNormalize.load reads it: statistics of the largest batch
+    (LIMITS['envs'] envs, randomized physics, so each env's info is in the file), with seeded spaces,
+    in each protocol Python 3 writes."""
+    from snakesim.envs.sb3 import SnakeVecEnv
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    envs = LIMITS["envs"]
+    saved = VecNormalize(SnakeVecEnv(envs, joints=3, randomize={"mass_scale": [0.9, 1.1]}))
+    saved.reset()
+    for _ in range(3):
+        saved.step(np.zeros((envs, 3), np.float32))
+    saved.observation_space.seed(5)
+    saved.observation_space.sample()
+    path = tmp_path / "vecnormalize.pkl"
+    with open(path, "wb") as f:
+        pickle.dump(saved, f, protocol=protocol)
+    ours = load_normalizer(path, 8)
+    theirs = VecNormalize.load(str(path), SnakeVecEnv(1, joints=3))
+    assert _statistics_of(ours) == _statistics_of(theirs) and ours.training is False
+    assert np.asarray(ours.old_obs).shape == (envs, 8) and float(ours.obs_rms.count) > 3 * envs
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"epsilon": float("nan")}, "its epsilon is not a number that keeps var + epsilon positive"),
+        ({"epsilon": -1.0}, "its epsilon is not a number that keeps var + epsilon positive"),
+        ({"epsilon": "1e-8"}, "its epsilon is not a number that keeps var + epsilon positive"),
+        ({"clip_obs": 0.0}, "its clip_obs is not a positive number"),
+        ({"clip_obs": float("nan")}, "its clip_obs is not a positive number"),
+        ({"clip_obs": [10.0]}, "its clip_obs is not a positive number"),
+        ({"norm_obs": "yes"}, "its norm_obs is not true or false"),
+    ],
+)
+def test_statistics_that_would_normalise_to_nan_are_refused(exported, tmp_path, capsys, change, message):
+    """Finite statistics of the right size are not enough: epsilon and clip_obs enter every normalised
+    observation too (a NaN epsilon made every one NaN, silently)."""
+    from snakesim.envs.sb3 import SnakeVecEnv
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    model = tmp_path / "m.zip"
+    model.write_bytes(exported.read_bytes())
+    venv = SnakeVecEnv(1, **agents.load_agent(exported).env_kwargs)
+    stats = VecNormalize.load(str(exported.parent / "goal-5_vecnormalize.pkl"), venv)
+    for key, value in change.items():
+        setattr(stats, key, value)
+    stats.save(str(tmp_path / "m_vecnormalize.pkl"))
+    line = one_line_error(capsys, "evaluate", model, "--episodes", 1)
+    assert line.endswith(f"{tmp_path / 'm_vecnormalize.pkl'}: {message}"), line
+    with pytest.raises(agents.AgentError, match=re.escape(message)):
+        agents.load_agent(model)
+
+
+# -- issue 57: torch's load errors in one line ------------------------------------------------------------
+def _weights_of(path: Path) -> dict:
+    import torch
+
+    with zipfile.ZipFile(path) as archive:
+        return torch.load(io.BytesIO(archive.read("policy.pth")), weights_only=True)
+
+
+def _with_weights(path: Path, out: Path, state: dict) -> Path:
+    import torch
+
+    buffer = io.BytesIO()
+    torch.save(state, buffer)
+    return rewrite_zip(path, out, **{"policy.pth": buffer.getvalue()})
+
+
+def _edited(state: dict, **changes) -> dict:
+    out = dict(state)
+    for name, value in changes.items():
+        name = name.replace("__", ".")
+        if value is None:
+            del out[name]
+        else:
+            out[name] = value(out.get(name))
+    return out
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        # The issue's two: a sparse tensor (three lines of torch's text, no file), and a shape mismatch
+        # ("Error(s) in loading state_dict for ActorCriticPolicy:").
+        (
+            {"action_net__weight": lambda t: t.to_sparse()},
+            "tensor action_net.weight is a sparse_coo tensor; a policy's weights are dense",
+        ),
+        (
+            {"value_net__weight": lambda t: t[:, :7].clone()},
+            "the weights do not fit the network: tensor value_net.weight has shape [1, 7], expected [1, 64]",
+        ),
+        (
+            {"action_net__weight": lambda t: t.to_sparse_csr()},
+            "tensor action_net.weight is a sparse_csr tensor; a policy's weights are dense",
+        ),
+        (
+            {"action_net__weight": lambda t: t.t().contiguous()},
+            "the weights do not fit the network: tensor action_net.weight has shape [64, 3], expected "
+            "[3, 64]",
+        ),
+        (
+            {"log_std": lambda t: t[:, None].clone()},
+            "the weights do not fit the network: tensor log_std has shape [3, 1], expected [3]",
+        ),
+        ({"log_std": None}, "the weights do not fit the network: no tensor log_std (expected shape [3])"),
+        (
+            {"extra__weight": lambda _: __import__("torch").zeros(2)},
+            "the weights do not fit the network: tensor extra.weight is not one of its 13 (PPO-small, 20 "
+            "observations)",
+        ),
+        (
+            {"action_net__weight": lambda t: t.to(__import__("torch").int64)},
+            "tensor action_net.weight holds int64 values, not floating-point weights",
+        ),
+        (
+            {"action_net__weight": lambda t: __import__("torch").complex(t, t)},
+            "tensor action_net.weight holds complex64 values, not floating-point weights",
+        ),
+        (
+            {"action_net__weight": lambda t: t.to("meta")},
+            "tensor action_net.weight holds no values (a meta tensor)",
+        ),
+        (
+            # Finite in float64, infinite in the float32 network.
+            {"action_net__bias": lambda t: t.double() * 1e300},
+            "tensor action_net.bias holds NaN or infinite values",
+        ),
+    ],
+)
+@pytest.mark.filterwarnings("ignore:Sparse CSR tensor support is in beta state")  # making one here
+def test_torch_load_errors_are_one_line_naming_file_member_and_tensor(
+    exported, tmp_path, capsys, edit, message
+):
+    bad = _with_weights(exported, tmp_path / "bad.zip", _edited(_weights_of(exported), **edit))
+    expected = f"{bad}: member policy.pth: {message}"
+    code, out, err = run_cli(capsys, "evaluate", bad, "--episodes", 1)
+    assert code == 1 and out == "" and err == f"snakesim evaluate: error: {expected}\n", err
+    with pytest.raises(agents.AgentError) as error:
+        agents.load_agent(bad)
+    assert str(error.value) == expected
+
+
+def test_a_policy_pth_torch_cannot_read_is_one_line(exported, tmp_path, capsys):
+    """torch's paragraph (which suggests loading the file with weights_only=False) becomes its finding."""
+    import torch
+
+    tried = "member policy.pth: cannot load it with torch.load(weights_only=True): "
+    for content, said in (
+        (b"garbage", "UnpicklingError: Unsupported operand 103"),
+        (
+            pickle.dumps(print, protocol=2),
+            "UnpicklingError: Unsupported global: GLOBAL print was not an allowed global",
+        ),
+        (
+            b"PK\x03\x04" * 3,
+            "RuntimeError: PytorchStreamReader failed reading zip archive: not a ZIP archive",
+        ),
+    ):
+        bad = rewrite_zip(exported, tmp_path / "bad.zip", **{"policy.pth": content})
+        line = one_line_error(capsys, "evaluate", bad, "--episodes", 1)
+        assert line.startswith(f"snakesim evaluate: error: {bad}: {tried}{said}"), line
+        assert "weights_only` set to `False`" not in line
+    for state in ([1, 2], {"a": 1}, {1: torch.zeros(1)}):
+        buffer = io.BytesIO()
+        torch.save(state, buffer)
+        bad = rewrite_zip(exported, tmp_path / "bad.zip", **{"policy.pth": buffer.getvalue()})
+        said = (
+            f"{bad}: member policy.pth: cannot load it as a policy: it holds no state dict (tensors by name)"
+        )
+        with pytest.raises(agents.AgentError, match=re.escape(said)):
+            agents.load_agent(bad)
+
+
+@pytest.mark.parametrize("dtype", ["float16", "bfloat16", "float64"])
+def test_weights_of_any_float_precision_still_load(exported, tmp_path, dtype):
+    # Read as float32, the network's (as load_state_dict did): the file's values, exactly where float32
+    # holds them.
+    import torch
+
+    state = {k: v.to(getattr(torch, dtype)) for k, v in _weights_of(exported).items()}
+    agent = agents.load_agent(_with_weights(exported, tmp_path / "w.zip", state))
+    for name, tensor in agent.policy.state_dict().items():
+        assert tensor.dtype == torch.float32
+        np.testing.assert_array_equal(tensor.numpy(), state[name].float().numpy())
+
+
+# -- issue 57: a randomize file is never quoted whole -----------------------------------------------------
+SHADOW_LINE = "root:$6$abcdefghijklmnop$QWERTYUIOPasdfghjklzxcvbnm1234567890qwertyuiopA./:19000:0:99999:7:::"
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        f"{SHADOW_LINE}\n",  # the issue's: the line alone (a key with no value, to YAML)
+        f"mass_scale: [0.9, 1.1]\n{SHADOW_LINE}\n",
+        f"mass_scale: '{SHADOW_LINE}'\n",
+        f"mass_scale: ['{SHADOW_LINE}', 1.1]\n",
+        f"'{SHADOW_LINE}': [0.9, 1.1]\n",
+        f"mass_scale: [0.9, 1.1]\nmass_scale: '{SHADOW_LINE}'\n",
+        f"mass_scale: [0.9,\n{SHADOW_LINE}\n",
+    ],
+)
+def test_a_randomize_file_is_quoted_at_most_in_short_excerpts(tmp_path, capsys, text):
+    """The issue's command, `snakesim evaluate models/goal-10.safetensors --randomize F.yaml`, on a
+    file holding a password-hash line printed the line twice, uncut: now at most 24 characters of a
+    value the file holds appear in the error (docs/formats.md), none of such a line."""
+    rnd = tmp_path / "F.yaml"
+    rnd.write_text(text)
+    line = one_line_error(
+        capsys, "evaluate", MODELS / "goal-10.safetensors", "--randomize", rnd, "--episodes", 1
+    )
+    assert "$6$" not in line and "QWERTY" not in line and "99999" not in line, line
+    for quoted in re.findall(r"'([^']*)'|\"([^\"]*)\"|`([^`]*)`", line):
+        assert len("".join(quoted)) <= 24, line

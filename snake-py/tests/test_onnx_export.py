@@ -219,6 +219,10 @@ class SimulatedRobot:
         self.env, self.steps = env, steps
         self.obs, _ = env.reset(seed=3)
         self.seen, self.sent = [], []
+        self.stopped = False
+
+    def stop(self):
+        self.stopped = True
 
     def part(self, name):
         return self.obs[observation_slice(self.env.observation_structure, name)]
@@ -239,18 +243,60 @@ class SimulatedRobot:
         self.obs, *_ = self.env.step(self.sent[-1] / self.env.config["action_scale"])
 
 
-def test_the_control_loop_of_docs_deploy_md_runs(tmp_path, capsys, monkeypatch):
+def control_loop(out):
+    """docs/deploy.md's control loop, reading ``out``."""
     page = (REPO / "docs" / "deploy.md").read_text()
     loop = page.split("## A control loop", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    return compile(loop.replace('"paper-10.onnx"', repr(str(out))), "deploy.md", "exec")
+
+
+def test_the_control_loop_of_docs_deploy_md_runs(tmp_path, capsys, monkeypatch):
     model = MODELS / "paper-10.safetensors"
     out = export(capsys, model, tmp_path / "paper-10.onnx")
     agent = agents.load_agent(model)
     robot = SimulatedRobot(make_env(**agent.env_kwargs), steps=20)
     monkeypatch.setattr("time.sleep", lambda seconds: None)
-    exec(compile(loop.replace('"paper-10.onnx"', repr(str(out))), "deploy.md", "exec"), {"robot": robot})
-    assert len(robot.sent) == 20
+    exec(control_loop(out), {"robot": robot})
+    assert len(robot.sent) == 20 and not robot.stopped
     expected = np.clip(agent.act(np.array(robot.seen)), -1, 1) * robot.env.config["action_scale"]
     np.testing.assert_allclose(np.array(robot.sent), expected, atol=TOLERANCE, rtol=0)
+
+
+class FailingSensor(SimulatedRobot):
+    """A robot whose joint encoder ``joint`` reads ``value`` from step ``at`` on."""
+
+    def __init__(self, env, steps, at, joint, value):
+        super().__init__(env, steps)
+        self.at, self.joint, self.value = at, joint, value
+
+    def read_joints(self):
+        angles, velocities = (np.array(part) for part in super().read_joints())
+        if len(self.sent) >= self.at:
+            angles[self.joint] = self.value
+        return angles, velocities
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_the_graph_acts_on_what_act_refuses_and_the_loop_stops(value, tmp_path, capsys, monkeypatch):
+    """The issue's case: a NaN observation gives NaN actions from the graph (an infinite one, actions
+    from its clip), where act refuses it; the documented loop stops the robot instead of acting."""
+    model = MODELS / "paper-10.safetensors"
+    out = export(capsys, model, tmp_path / "paper-10.onnx")
+    agent = agents.load_agent(model)
+    obs = observations(agent, rows=4)
+    obs[1, 3] = value  # joint 0's velocity (after the head's x and y and joint 0's angle)
+    graph = session(out).run([onnx_export.OUTPUT], {onnx_export.INPUT: obs})[0]
+    if np.isnan(value):
+        assert np.isnan(graph[1]).all() and np.isfinite(graph[[0, 2, 3]]).all()
+    else:
+        assert np.isfinite(graph).all()  # clipped by the normalisation: it would act
+    with pytest.raises(ValueError, match=r"obs\[1, 3\] must be finite"):
+        agent.act(obs)
+    robot = FailingSensor(make_env(**agent.env_kwargs), steps=20, at=7, joint=1, value=value)
+    monkeypatch.setattr("time.sleep", lambda seconds: None)
+    with pytest.raises(RuntimeError, match=r"observation \[4\] not finite"):
+        exec(control_loop(out), {"robot": robot})
+    assert robot.stopped and len(robot.sent) == 7 and np.isfinite(np.array(robot.sent)).all()
 
 
 # -- SB3 models -------------------------------------------------------------------------------------

@@ -137,3 +137,99 @@ def test_make_vec_gives_the_native_vector_env_as_gymnasium_make_gives_envs(env_i
     assert ends == [False] * (limit - 1) + [True]
     with pytest.raises(ValueError, match="task is"):
         gymnasium.make_vec(env_id, num_envs=1, task="nope")
+
+
+# -- a list of seeds (Gymnasium's), and closing ------------------------------------------------------
+def test_reset_takes_a_list_of_seeds_one_per_env():
+    """Gymnasium's vector envs take a list of num_envs seeds, env i reset with seeds[i] and None letting
+    env i go on with its own stream: the issue's ``reset(seed=[1, 2, 3])`` raised TypeError."""
+    venv = SnakeVectorEnv(3, joints=2)
+    obs, _ = venv.reset(seed=[1, 2, 3])
+    assert obs.tobytes() == venv.reset(seed=1)[0].tobytes(), "[s, s + 1, ...] is seed=s"
+    obs, _ = venv.reset(seed=(9, 4, 2**64 - 1))
+    for i, seed in enumerate((9, 4, 2**64 - 1)):
+        assert obs[i].tobytes() == snakesim.SnakeEnv(joints=2).reset(seed=seed)[0].tobytes()
+    # None: env 1 goes on from its last episode (seeded 4), as a single env reset without a seed does.
+    obs, _ = venv.reset(seed=np.array([5, 6, 7]))
+    single = snakesim.SnakeEnv(joints=2)
+    single.reset(seed=6)
+    mixed, _ = venv.reset(seed=[11, None, 13])
+    assert mixed[1].tobytes() == single.reset()[0].tobytes()
+    assert mixed[0].tobytes() == snakesim.SnakeEnv(joints=2).reset(seed=11)[0].tobytes()
+    # Steps go on from those episodes, bit for bit as a single env's.
+    action = np.full((3, 2), 0.3, np.float32)
+    assert venv.step(action)[0][1].tobytes() == single.step(action[1])[0].tobytes()
+
+
+def test_a_first_reset_with_none_seeds_is_random():
+    # None at the first reset draws a fresh seed (as reset() does), not a fixed stream.
+    first = [SnakeVectorEnv(2, joints=2).reset(seed=[None, 3])[0] for _ in range(2)]
+    assert first[0][0].tobytes() != first[1][0].tobytes()
+    assert first[0][1].tobytes() == first[1][1].tobytes()
+
+
+@pytest.mark.parametrize(
+    ("seed", "error", "match"),
+    [
+        ([1, 2], ValueError, r"a list of seeds holds one per env, 3, got 2"),
+        ([1, 2, 3, 4], ValueError, r"one per env, 3, got 4"),
+        ([], ValueError, r"one per env, 3, got 0"),
+        ([1, -1, 2], ValueError, r"seed\[1\] must be None or an int in \[0, 2\*\*64\), got -1"),
+        ([1, 2**64, 2], ValueError, r"seed\[1\] must be .*, got 18446744073709551616"),
+        ([1, 2.5, 2], ValueError, r"seed\[1\] must be .*, got 2.5"),
+        ([True, 2, 3], ValueError, r"seed\[0\] must be .*, got True"),
+        (["1", 2, 3], ValueError, r"seed\[0\] must be .*, got '1'"),
+        (-1, ValueError, r"seed must be None or an int in \[0, 2\*\*64\), got -1"),
+        (2.0, TypeError, r"seed must be None, an int or a list of 3 seeds \(one per env\), got float"),
+        ("123", TypeError, r"got str"),
+        ({1, 2, 3}, TypeError, r"got set"),
+    ],
+)
+def test_bad_seeds_are_clear_errors(seed, error, match):
+    venv = SnakeVectorEnv(3, joints=2)
+    with pytest.raises(error, match=match):
+        venv.reset(seed=seed)
+    # Nothing was reset: the env still needs its first reset.
+    with pytest.raises(Exception, match="reset"):
+        venv.step(np.zeros((3, 2), np.float32))
+
+
+def test_gymnasium_s_own_vector_env_takes_the_same_seeds():
+    """The semantics followed: SyncVectorEnv over single envs gives the same observations."""
+    import gymnasium
+
+    sync = gymnasium.vector.SyncVectorEnv([lambda: snakesim.SnakeEnv(joints=2) for _ in range(3)])
+    ours = SnakeVectorEnv(3, joints=2)
+    for seeds in ([4, 8, 15], [16, None, 23]):
+        assert ours.reset(seed=seeds)[0].tobytes() == sync.reset(seed=seeds)[0].tobytes()
+    with pytest.raises(ValueError, match="num_envs=3"):
+        sync.reset(seed=[1, 2])
+
+
+def _closed_envs():
+    import gymnasium
+
+    yield "SnakeVectorEnv", SnakeVectorEnv(2, joints=2), lambda env: env.step(np.zeros((2, 2), np.float32))
+    yield "SnakeVecEnv", SnakeVecEnv(2, joints=2), lambda env: env.step(np.zeros((2, 2), np.float32))
+    yield "SnakeEnv", snakesim.SnakeEnv(joints=2), lambda env: env.step(np.zeros(2, np.float32))
+    made = gymnasium.make(snakesim.GOAL_ENV_ID, joints=2)
+    yield "SnakeGoalEnv", made, lambda env: env.step(np.zeros(3, np.float32))
+
+
+@pytest.mark.parametrize("name", ["SnakeVectorEnv", "SnakeVecEnv", "SnakeEnv", "SnakeGoalEnv"])
+def test_a_closed_env_refuses_step_and_reset(name):
+    """The issue's case: step after close() still worked. Now step and reset raise Gymnasium's
+    ClosedEnvironmentError (its vector envs' convention), and close() twice is fine."""
+    from gymnasium.error import ClosedEnvironmentError
+
+    env, step = next((e, s) for n, e, s in _closed_envs() if n == name)
+    env.reset()
+    step(env)  # works while open
+    env.close()
+    env.close()
+    message = f"this {name} was closed \\(close\\(\\) released its worlds\\): make a new one"
+    with pytest.raises(ClosedEnvironmentError, match=message):
+        step(env)
+    with pytest.raises(ClosedEnvironmentError, match=message):
+        env.reset()
+    env.close()

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import json
+import math
 import os
 import re
 import stat
@@ -416,7 +417,7 @@ def _read_sb3(
     policy, arch = _sb3_policy(model, archive, device)
     normalizer = None
     if located.normalizer is not None:
-        normalizer = load_normalizer(located.normalizer)
+        normalizer = load_normalizer(located.normalizer, info.observation_dim)
         _check_statistics(located.normalizer, normalizer, info.observation_dim)
     return Agent(
         policy=policy,
@@ -568,36 +569,105 @@ def _sb3_policy(path: Path, archive: _Zip, device: str):
     info, data = archive.info, archive.data
     if data.get("use_sde"):
         raise AgentError(f"{path}: models with gSDE (use_sde) are not supported")
-    try:
-        state = torch.load(io.BytesIO(archive.weights), map_location=device, weights_only=True)
-    except Exception as error:  # noqa: BLE001 - a corrupt policy.pth fails in torch in many ways
-        raise AgentError(f"cannot load {path} as a PPO model: {_first_line(error)}") from None
-    if not isinstance(state, dict) or not all(
-        isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in state.items()
-    ):
-        raise AgentError(f"cannot load {path} as a PPO model: its policy.pth holds no state dict")
+    where = f"{path}: member policy.pth"
+    state = _weights(where, archive.weights, device)
     if info.legacy:
         state = convert_legacy_state_dict(state)
     activation = _activation(path, data.get("policy_kwargs"))
-    widths = _widths(path, state, info)
+    widths = _widths(where, state, info)
     try:
         label = runconfig.arch_label(widths)
     except runconfig.ConfigError as error:
         raise AgentError(f"{path}: its network: {error}") from None
-    if not all(bool(torch.isfinite(v).all()) for v in state.values() if v.is_floating_point()):
-        raise AgentError(f"{path}: its weights hold NaN or infinite values")
+    # In float32, as the network holds them (a float64 weight of 1e300 becomes infinite there).
+    state = {name: tensor.to(torch.float32) for name, tensor in state.items()}
+    for name, tensor in state.items():
+        if not bool(torch.isfinite(tensor).all()):
+            raise AgentError(f"{where}: tensor {_tensor_name(name)} holds NaN or infinite values")
     observation_space, action_space = _spaces(info.observation_dim, info.action_dim)
     kwargs = policy_kwargs(widths)
     if activation is not None:
         kwargs["activation_fn"] = activation
     policy = ActorCriticPolicy(observation_space, action_space, lambda _: 0.0, **kwargs).to(device)
+    expected = policy.state_dict()
+    for name, tensor in expected.items():
+        if name not in state:
+            raise AgentError(
+                f"{where}: the weights do not fit the network: no tensor {name} (expected shape "
+                f"{list(tensor.shape)})"
+            )
+        if state[name].shape != tensor.shape:
+            raise AgentError(
+                f"{where}: the weights do not fit the network: tensor {name} has shape "
+                f"{list(state[name].shape)}, expected {list(tensor.shape)}"
+            )
+    extra = [name for name in state if name not in expected]
+    if extra:
+        raise AgentError(
+            f"{where}: the weights do not fit the network: tensor {_tensor_name(extra[0])} is not one of "
+            f"its {len(expected)} (PPO-{label}, {info.observation_dim} observations)"
+        )
     try:
         policy.load_state_dict(state)
-    except RuntimeError as error:
-        first = str(error).strip().splitlines()[0][:200]
-        raise AgentError(f"{path}: the weights do not fit the network: {first}") from None
+    except RuntimeError as error:  # after the checks above, a bug here rather than the file's
+        raise AgentError(f"{where}: the weights do not fit the network: {_first_line(error)}") from None
     policy.set_training_mode(False)
     return policy, label
+
+
+def _tensor_name(name: str) -> str:
+    """A tensor's name from the file, for an error: a short dotted name as it is, anything else as
+    an excerpt."""
+    if re.fullmatch(r"[\w.]{1,80}", name, flags=re.ASCII):
+        return name
+    shown = json.dumps(name)
+    return shown if len(shown) <= 24 else shown[:21] + "..."
+
+
+def _torch_error(error: BaseException) -> str:
+    """What went wrong in ``torch.load``, in a sentence: its weights-only unpickler's own finding
+    (``Unsupported operand 103``) rather than the paragraph around it, which suggests loading the file
+    unsafely."""
+    text = str(error)
+    if "WeightsUnpickler error:" in text:
+        text = text.split("WeightsUnpickler error:", 1)[1]
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    first = lines[0].split(". ")[0].removesuffix(".") if lines else ""
+    return f"{type(error).__name__}: {first[:160]}{'...' if len(first) > 160 else ''}"
+
+
+def _weights(where: str, data: bytes, device: str) -> dict[str, Any]:
+    """``policy.pth`` read by ``torch.load(weights_only=True)``: a state dict of dense floating-point
+    tensors (AgentError naming the file, the member and the tensor otherwise)."""
+    import warnings
+
+    import torch
+
+    try:
+        with warnings.catch_warnings():
+            # torch's notes on what it reads (sparse tensors, their beta state): such a tensor is
+            # refused below in one line.
+            warnings.simplefilter("ignore")
+            state = torch.load(io.BytesIO(data), map_location=device, weights_only=True)
+    except Exception as error:  # noqa: BLE001 - a corrupt policy.pth fails in torch in many ways
+        raise AgentError(
+            f"{where}: cannot load it with torch.load(weights_only=True): {_torch_error(error)}"
+        ) from None
+    if not isinstance(state, dict) or not all(
+        isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in state.items()
+    ):
+        raise AgentError(f"{where}: cannot load it as a policy: it holds no state dict (tensors by name)")
+    for name, tensor in state.items():
+        shown = _tensor_name(name)
+        if tensor.layout != torch.strided:
+            layout = str(tensor.layout).removeprefix("torch.")
+            raise AgentError(f"{where}: tensor {shown} is a {layout} tensor; a policy's weights are dense")
+        if tensor.device.type == "meta":
+            raise AgentError(f"{where}: tensor {shown} holds no values (a meta tensor)")
+        if not tensor.is_floating_point():
+            dtype = str(tensor.dtype).removeprefix("torch.")
+            raise AgentError(f"{where}: tensor {shown} holds {dtype} values, not floating-point weights")
+    return state
 
 
 def _activation(path: Path, kwargs: Any):
@@ -620,7 +690,7 @@ def _activation(path: Path, kwargs: Any):
     return getattr(torch.nn, match.group(1))
 
 
-def _widths(path: Path, state: Mapping[str, Any], info: ModelInfo) -> dict[str, list[int]]:
+def _widths(path: Path | str, state: Mapping[str, Any], info: ModelInfo) -> dict[str, list[int]]:
     """The widths of the shared trunk and the heads, read from the weights' shapes, checked layer by
     layer (each Linear takes what the one before gives) before anything is built from them."""
     widths: dict[str, list[int]] = {}
@@ -662,17 +732,18 @@ def _spaces(obs_dim: int, act_dim: int):
 
 
 # -- VecNormalize statistics ----------------------------------------------------------------------
-def load_normalizer(path: str | os.PathLike):
+def load_normalizer(path: str | os.PathLike, observation_size: int | None = None):
     """A ``VecNormalize`` saved beside a model, for evaluation (not updated); AgentError when the file
     is not one. Unpickled through an allow-list (:mod:`snakesim.agents.safe_pickle`): a pickle that
-    names anything else is refused before it runs."""
+    names anything else is refused before it runs, and one that asks for statistics larger than
+    ``observation_size`` (the model's; None: ``LIMITS['space_size']``) before they are allocated."""
     from stable_baselines3.common.vec_env import VecNormalize
 
     from snakesim.agents.safe_pickle import RefusedPickle, load_statistics
 
     name = os.fspath(path)
     try:
-        normalizer = load_statistics(read_bytes(path, "config_bytes"))
+        normalizer = load_statistics(read_bytes(path, "config_bytes"), observation_size)
     except FileError as error:
         raise AgentError(str(error)) from None
     except RefusedPickle as error:
@@ -688,12 +759,26 @@ def load_normalizer(path: str | os.PathLike):
 
 
 def _check_statistics(path: Path, normalizer: Any, obs_dim: int) -> None:
-    """AgentError unless the statistics normalise the model's observations (finite, of its size)."""
+    """AgentError unless the statistics normalise the model's observations (finite, of its size) to
+    finite values: ``(obs - mean) / sqrt(var + epsilon)`` clipped to ``clip_obs``."""
     rms = getattr(normalizer, "obs_rms", None)
     mean, var = getattr(rms, "mean", None), getattr(rms, "var", None)
-    fits = all(isinstance(a, np.ndarray) and a.shape == (obs_dim,) for a in (mean, var))
+    fits = all(
+        isinstance(a, np.ndarray) and a.shape == (obs_dim,) and a.dtype.kind in "iuf" for a in (mean, var)
+    )
     if not fits or not (np.isfinite(mean).all() and np.isfinite(var).all() and (var >= 0).all()):
         raise AgentError(f"{path}: not the statistics of {obs_dim} finite observations the model takes")
+
+    def number(value: Any) -> bool:
+        return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+    epsilon, clip = getattr(normalizer, "epsilon", None), getattr(normalizer, "clip_obs", None)
+    if not (number(epsilon) and math.isfinite(epsilon) and epsilon >= 0 and (var + epsilon > 0).all()):
+        raise AgentError(f"{path}: its epsilon is not a number that keeps var + epsilon positive")
+    if not (number(clip) and clip > 0):
+        raise AgentError(f"{path}: its clip_obs is not a positive number")
+    if not isinstance(getattr(normalizer, "norm_obs", None), (bool, np.bool_)):
+        raise AgentError(f"{path}: its norm_obs is not true or false")
 
 
 # -- baselines ------------------------------------------------------------------------------------

@@ -20,6 +20,21 @@ from snakesim.envs.config import action_array, env_config, file_keyword, observa
 from snakesim.envs.render import top_down
 
 
+class ClosedCore:
+    """Stands for an env's Rust core once the env is closed: every use raises
+    ``gymnasium.error.ClosedEnvironmentError`` (Gymnasium's error for an env used after ``close()``)."""
+
+    __slots__ = ("_owner",)
+
+    def __init__(self, owner: str) -> None:
+        self._owner = owner
+
+    def __getattr__(self, name: str) -> Any:
+        raise gymnasium.error.ClosedEnvironmentError(
+            f"{self._owner} was closed (close() released its worlds): make a new one"
+        )
+
+
 class SnakeEnv(gymnasium.Env):
     """A snake of N position-controlled joints that must crawl to a goal on a plane.
 
@@ -117,6 +132,9 @@ class SnakeEnv(gymnasium.Env):
     **Pickling** carries the configuration only, not the episode (a Bullet world cannot be saved bit
     for bit): the unpickled env needs ``reset()``, and its ``step()`` raises
     ``gymnasium.error.ResetNeeded`` until then, also under wrappers that saw a reset.
+
+    **Closing** (``close()``) releases the Bullet world; afterwards ``reset``, ``step`` and whatever
+    reads the world raise ``gymnasium.error.ClosedEnvironmentError`` (``close()`` again does nothing).
 
     **Version history** (Gymnasium's rule: a change that can change learning, in the observation, the
     action, the reward, the episode's end, the dynamics or a default, bumps the id's ``-vN``; one that
@@ -270,7 +288,8 @@ class SnakeEnv(gymnasium.Env):
         )
 
     def close(self) -> None:
-        pass
+        # The Bullet world goes with the core; every later use of it says the env was closed.
+        self._env = ClosedCore(f"this {type(self).__name__}")
 
     # A pickle carries the configuration only (what SubprocVecEnv and copies need), not an episode: the
     # Bullet world's state cannot be saved bit for bit. The unpickled env starts fresh, as after

@@ -10,6 +10,7 @@ from gymnasium import spaces
 
 from snakesim import _core, extras
 from snakesim.envs.config import ENV_DEFAULTS, action_array, env_config
+from snakesim.envs.env import ClosedCore
 
 extras.require("sb3", "snakesim.SnakeVecEnv (Stable-Baselines3's VecEnv)")
 
@@ -24,7 +25,8 @@ class SnakeVecEnv(VecEnv):
     ``infos[i]["terminal_observation"]`` holds the last observation and
     ``infos[i]["TimeLimit.truncated"]`` says whether the episode was truncated rather than ended. Wrap it
     in ``VecMonitor`` for episode returns in the logs. ``seed(s)`` makes the next reset seed env i
-    with ``s + i``.
+    with ``s + i``. ``close()`` releases the worlds; ``reset`` and ``step`` then raise
+    ``gymnasium.error.ClosedEnvironmentError``.
 
     Keyword arguments are those of :class:`snakesim.SnakeEnv` (without ``render_mode``).
     """
@@ -87,7 +89,8 @@ class SnakeVecEnv(VecEnv):
         return obs, rewards.astype(np.float32), terminated | truncated, infos
 
     def close(self) -> None:
-        pass
+        # The worlds go with the core; reset and step then raise ClosedEnvironmentError.
+        self._core = ClosedCore("this SnakeVecEnv")
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
         if attr_name == "render_mode":

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import operator
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -19,6 +20,7 @@ from snakesim.envs.config import (
     action_array,
     env_config,
 )
+from snakesim.envs.env import ClosedCore
 
 
 class SnakeVectorEnv(VectorEnv):
@@ -27,9 +29,13 @@ class SnakeVectorEnv(VectorEnv):
     Worlds step in parallel on Rust threads (no subprocesses, no pickling). Finished episodes reset in
     the same step (``autoreset_mode`` SAME_STEP): the returned observation is the new episode's first,
     and ``infos["final_obs"]`` / ``infos["final_info"]`` (masked by ``infos["_final_obs"]``) hold the
-    finished episode's last observation and info. ``reset(seed=s)`` seeds env i with ``s + i``. With
-    ``randomize``, ``infos["physics"]`` (masked by ``infos["_physics"]``) holds what each episode that
-    began drew: every env's at ``reset``, the reset ones' in ``step``.
+    finished episode's last observation and info. ``reset(seed=s)`` seeds env i with ``s + i``;
+    ``reset(seed=[s0, s1, ...])``, one seed per env as Gymnasium's vector envs take them, env i with
+    ``s_i`` (None: env i goes on with its own stream, or at the first reset draws a fresh seed; a list
+    of another length is a ``ValueError``). ``close()`` releases the worlds; ``reset`` and ``step``
+    then raise ``gymnasium.error.ClosedEnvironmentError``. With ``randomize``, ``infos["physics"]``
+    (masked by ``infos["_physics"]``) holds what each episode that began drew: every env's at
+    ``reset``, the reset ones' in ``step``.
 
     Keyword arguments are those of :class:`snakesim.SnakeEnv` (without ``render_mode``).
     """
@@ -51,14 +57,22 @@ class SnakeVectorEnv(VectorEnv):
         self.observation_structure: dict[str, int] = self._core.observation_structure
 
     def reset(
-        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: Mapping[str, Any] | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
         if options:
             raise ValueError("SnakeVectorEnv.reset takes no options; use SnakeEnv to place a single snake")
-        if seed is None and not hasattr(self, "_seeded"):
-            seed = int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
+        first = not hasattr(self, "_seeded")
+        if seed is None or _is_int(seed):
+            seed = None if seed is None else _checked_seed(seed, "seed")
+            obs = self._core.reset(_fresh_seed() if seed is None and first else seed)
+        else:
+            # One seed per env (Gymnasium's list); at the first reset, None draws a fresh seed.
+            seeds = _seed_list(seed, self.num_envs)
+            obs = self._core.reset_each([_fresh_seed() if s is None and first else s for s in seeds])
         self._seeded = True
-        obs = self._core.reset(seed)
         infos: dict[str, Any] = {}
         for index, physics in enumerate(self._core.physics() or ()):
             infos = self._add_info(infos, {"physics": physics}, index)
@@ -76,7 +90,37 @@ class SnakeVectorEnv(VectorEnv):
         return obs, rewards, terminated, truncated, infos
 
     def close_extras(self, **kwargs: Any) -> None:
-        pass
+        # The worlds go with the core; every later use says the env was closed.
+        self._core = ClosedCore("this SnakeVectorEnv")
+
+
+def _fresh_seed() -> int:
+    """A seed from the OS's entropy, for a first reset without one (episodes stay random)."""
+    return int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _seed_list(seed: Any, num_envs: int) -> list[int | None]:
+    """``reset``'s list of seeds, one per env (None or an int in [0, 2**64)), checked."""
+    if not isinstance(seed, (list, tuple, np.ndarray)):
+        raise TypeError(
+            f"seed must be None, an int or a list of {num_envs} seeds (one per env), "
+            f"got {type(seed).__name__}"
+        )
+    if len(seed) != num_envs:
+        raise ValueError(f"seed: a list of seeds holds one per env, {num_envs}, got {len(seed)}")
+    return [None if value is None else _checked_seed(value, f"seed[{i}]") for i, value in enumerate(seed)]
+
+
+def _checked_seed(value: Any, name: str) -> int:
+    if not (_is_int(value) and 0 <= operator.index(value) < 2**64):
+        shown = repr(value)
+        shown = shown if len(shown) <= 24 else shown[:21] + "..."
+        raise ValueError(f"{name} must be None or an int in [0, 2**64), got {shown}")
+    return operator.index(value)
 
 
 def _vector_env(
