@@ -12,6 +12,7 @@ use snake_core::{StartPose, StepBuffers, VecSnakeEnv};
 
 mod controllers;
 mod evaluation;
+mod inputs;
 mod lock;
 mod native;
 mod simulate;
@@ -496,6 +497,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     native::register(m)?;
     controllers::register(m)?;
     evaluation::register(m)?;
+    inputs::register(m)?;
     lock::register(m)?;
     simulate::register(m)?;
     Ok(())

@@ -435,11 +435,13 @@ def _read_sb3(
 
 def _recorded_files(model: Path, env_kwargs: dict[str, Any], records: Any) -> dict[str, Any]:
     """``env_kwargs`` with the robot and world files an SB3 zip records (``snakesim_env_files``) in
-    place of those that changed since training, with a note for each (as a native model's)."""
+    place of those that changed since training, with a note for each (as a native model's). A robot
+    or world path without a record is refused: a model's files come from its record, never from a
+    path it names alone."""
     from snakesim.envs.config import apply_env_files
 
     if records is None:
-        return env_kwargs
+        records = {}
     if not isinstance(records, dict) or ":serialized:" in records:
         raise AgentError(f"{model}: its {RECORDED_FILES_KEY} is not a JSON mapping")
     try:
