@@ -73,7 +73,7 @@ def test_evaluate_json_onto_the_urdf_a_robot_file_names_is_refused(robot_copy, c
             robot_copy.with_suffix(".urdf"),
         ],
     )
-    assert "it is a file this command reads" in line
+    assert "which this command reads" in line
     assert _snapshot(robot_copy.parent) == before
 
 
@@ -99,7 +99,7 @@ def test_outputs_onto_a_copied_models_robot_files_are_refused_however_spelled(tm
         "hard.json",
     ]:
         line = _one_line_error(capsys, ["evaluate", model, "--episodes", "1", "--json", target])
-        assert "it is a file this command reads" in line, line
+        assert "which this command reads" in line, line
     assert _snapshot(tmp_path / "robots") == before
 
 

@@ -67,7 +67,7 @@ def check_writable(path: str | os.PathLike, what: str = "", inputs: Iterable[str
             raise UserError(f"cannot write {label}: it is {os.fspath(source)}, which this command reads")
     if is_input(real):
         # Read already (a robot's URDF, a world's heightfield, a model's files), whatever path named it.
-        raise UserError(f"cannot write {label}: it is a file this command reads")
+        raise UserError(f"cannot write {label}: it is {os.fspath(path)}, which this command reads")
     return path
 
 
