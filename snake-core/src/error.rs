@@ -171,12 +171,22 @@ pub fn capped(message: String) -> String {
     format!("{start}{CUT}{end}")
 }
 
+/// A number for a message, short whatever its size: `3600`, `0.05`, `1e300`, `-1e-9`, `NaN` (Rust's
+/// `{}` writes 1e300 as 301 digits).
+pub fn short(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// Most digits of a number written out in a message: Rust's `{}` writes 1e300 with 301 digits and
 /// 1e-300 with 300 zeros, which a message would then cut in the middle of.
 const MAX_NUMBER_DIGITS: usize = 20;
 
 /// `message` with every number of more than [`MAX_NUMBER_DIGITS`] digits written short, as
-/// [`crate::limits::short`] writes it (`1e300`, `1e-300`): the rule for every error line, so that no
+/// [`short`] writes it (`1e300`, `1e-300`): the rule for every error line, so that no
 /// message needs to remember it.
 fn short_numbers(message: String) -> String {
     let bytes = message.as_bytes();
@@ -201,7 +211,7 @@ fn short_numbers(message: String) -> String {
         if count > MAX_NUMBER_DIGITS {
             if let Ok(x) = message[i..end].parse::<f64>() {
                 out.push_str(&message[copied..i]);
-                out.push_str(&crate::limits::short(x));
+                out.push_str(&short(x));
                 copied = end;
             }
         }

@@ -195,6 +195,26 @@ pub const MAX_NESTING: usize = 64;
 /// Most attributes of one XML element (a URDF tag has at most a handful).
 pub const MAX_XML_ATTRIBUTES: usize = 64;
 
+/// Checks a joint count against `[1, MAX_JOINTS]`, the one check of it in Rust (snake files, env
+/// keywords, run configurations and every command go through it); the error is about the key
+/// `joints`. Below 1 it says `must be in [1, 128], got 0`, above `must be at most 128, got N` (the
+/// wordings the CLI's and Python's tests name).
+pub fn check_joints(joints: usize) -> crate::Result<()> {
+    if joints < 1 {
+        Err(crate::error::invalid_at(
+            "joints",
+            format!("must be in [1, {MAX_JOINTS}], got {joints}"),
+        ))
+    } else if joints > MAX_JOINTS {
+        Err(crate::error::invalid_at(
+            "joints",
+            format!("must be at most {MAX_JOINTS}, got {joints}"),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
     if value.is_finite() && (low..=high).contains(&value) {
@@ -250,12 +270,106 @@ fn position_problem(x: f64, y: f64) -> Option<String> {
     }
 }
 
-/// A number for a message, short whatever its size: `3600`, `0.05`, `1e300`, `-1e-9`, `NaN` (Rust's
-/// `{}` writes 1e300 as 301 digits).
-pub fn short(x: f64) -> String {
-    if !x.is_finite() || x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
+/// A number for a message, short whatever its size (defined beside the errors, which write every
+/// long number short).
+pub use crate::error::short;
+
+/// One limit's value in [`ALL`]: a count or size, or a real number.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LimitValue {
+    /// A count, size or duration in steps.
+    Int(u64),
+    /// A real bound (metres, seconds, a scale, ...).
+    Float(f64),
+}
+
+/// Every limit of this module by name, the one table readers iterate (the Python side's `LIMITS`
+/// is built from it): `MAX_X` is `x`, a `MIN_X` and `MAX_X` pair or a `(low, high)` range is `x_min`
+/// and `x_max`. A test checks that every constant of this file is in it.
+pub const ALL: &[(&str, LimitValue)] = {
+    use LimitValue::{Float, Int};
+    &[
+        ("joints", Int(MAX_JOINTS as u64)),
+        ("position", Float(MAX_POSITION)),
+        ("start_height", Float(MAX_START_HEIGHT)),
+        ("yaw", Float(MAX_YAW)),
+        ("reward_weight", Float(MAX_REWARD_WEIGHT)),
+        ("action_scale", Float(MAX_ACTION_SCALE)),
+        ("episode_steps", Int(MAX_EPISODE_STEPS)),
+        ("physics_steps_per_env_step", Int(MAX_PHYSICS_STEPS_PER_ENV_STEP as u64)),
+        ("envs", Int(MAX_ENVS as u64)),
+        ("run_seconds", Float(MAX_RUN_SECONDS)),
+        ("recording_seconds", Float(MAX_RECORDING_SECONDS)),
+        ("space_size", Int(MAX_SPACE_SIZE as u64)),
+        ("replay_frames", Int(MAX_REPLAY_FRAMES)),
+        ("replay_fps_min", Float(REPLAY_FPS.0)),
+        ("replay_fps_max", Float(REPLAY_FPS.1)),
+        ("replay_panels", Int(MAX_REPLAY_PANELS)),
+        ("recording_episodes", Int(MAX_RECORDING_EPISODES)),
+        ("robot_links", Int(MAX_ROBOT_LINKS as u64)),
+        ("shapes_per_link", Int(MAX_SHAPES_PER_LINK as u64)),
+        ("urdf_bytes", Int(MAX_URDF_BYTES)),
+        ("target_rows", Int(MAX_TARGET_ROWS as u64)),
+        ("gait_amplitude_min", Float(GAIT_AMPLITUDE.0)),
+        ("gait_amplitude_max", Float(GAIT_AMPLITUDE.1)),
+        ("gait_spatial_min", Float(GAIT_SPATIAL.0)),
+        ("gait_spatial_max", Float(GAIT_SPATIAL.1)),
+        ("gait_period_min", Float(GAIT_PERIOD.0)),
+        ("gait_period_max", Float(GAIT_PERIOD.1)),
+        ("gait_phase_min", Float(GAIT_PHASE.0)),
+        ("gait_phase_max", Float(GAIT_PHASE.1)),
+        ("gait_pitch_rate_min", Float(GAIT_PITCH_RATE.0)),
+        ("gait_pitch_rate_max", Float(GAIT_PITCH_RATE.1)),
+        ("gait_offset_min", Float(GAIT_OFFSET.0)),
+        ("gait_offset_max", Float(GAIT_OFFSET.1)),
+        ("gait_length_min", Float(GAIT_LENGTH.0)),
+        ("gait_length_max", Float(GAIT_LENGTH.1)),
+        ("gait_ramp_min", Float(GAIT_RAMP.0)),
+        ("gait_ramp_max", Float(GAIT_RAMP.1)),
+        ("heightfield_bytes", Int(MAX_HEIGHTFIELD_BYTES)),
+        ("heightfield_side", Int(MAX_HEIGHTFIELD_SIDE as u64)),
+        ("heightfield_samples", Int(MAX_HEIGHTFIELD_SAMPLES as u64)),
+        ("noise_lattice", Int(MAX_NOISE_LATTICE as u64)),
+        ("terrain_height", Float(MAX_TERRAIN_HEIGHT)),
+        ("obstacles", Int(MAX_OBSTACLES as u64)),
+        ("craters", Int(MAX_CRATERS as u64)),
+        ("ridges", Int(MAX_RIDGES as u64)),
+        ("obstacle_size", Float(MAX_OBSTACLE_SIZE)),
+        ("slope_degrees", Float(MAX_SLOPE_DEGREES)),
+        ("world_friction", Float(MAX_WORLD_FRICTION)),
+        ("skin_friction", Float(MAX_SKIN_FRICTION)),
+        ("motor_velocity", Float(MAX_MOTOR_VELOCITY)),
+        ("latency_steps", Int(MAX_LATENCY_STEPS as u64)),
+        ("obs_noise", Float(MAX_OBS_NOISE)),
+        ("physics_scale_max", Float(MAX_PHYSICS_SCALE)),
+        ("physics_scale_min", Float(MIN_PHYSICS_SCALE)),
+        ("model_bytes", Int(MAX_MODEL_BYTES)),
+        ("config_bytes", Int(MAX_CONFIG_BYTES)),
+        ("csv_bytes", Int(MAX_CSV_BYTES)),
+        ("nesting", Int(MAX_NESTING as u64)),
+        ("xml_attributes", Int(MAX_XML_ATTRIBUTES as u64)),
+        ("error_chars", Int(crate::error::MAX_ERROR_CHARS as u64)),
+    ]
+};
+
+#[cfg(test)]
+mod table_tests {
+    /// Every `pub const` of this file (but the table) is named in [`super::ALL`], and no name twice.
+    #[test]
+    fn every_limit_is_in_the_table() {
+        let source = include_str!("limits.rs");
+        let table = source.split("pub const ALL").nth(1).expect("the table");
+        for line in source.lines() {
+            let Some(rest) = line.strip_prefix("pub const ") else { continue };
+            let name = rest.split(':').next().unwrap_or_default();
+            if name != "ALL" {
+                let named = [")", " as", "."].iter().any(|end| table.contains(&format!("({name}{end}")));
+                assert!(named, "{name} is not in limits::ALL");
+            }
+        }
+        let mut names: Vec<&str> = super::ALL.iter().map(|(n, _)| *n).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), super::ALL.len(), "a name twice in limits::ALL");
     }
 }

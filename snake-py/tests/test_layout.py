@@ -136,3 +136,106 @@ def test_no_import_circle_in_the_crates():
                     if nxt not in seen:
                         seen.add(nxt)
                         stack.append((nxt, [*path, nxt]))
+
+
+# -- docs/architecture.md is the map: its import layers hold, and it names every file ---------------
+
+ARCHITECTURE = REPO / "docs" / "architecture.md"
+
+
+def import_layers(text: str) -> list[list[str]]:
+    """The module patterns of each row of the map's "Import layers" table, top row first."""
+    import re
+
+    section = text.split("### Import layers", 1)[1].split("\n#", 1)[0]
+    rows = [line for line in section.splitlines() if line.startswith("| ") and "`snakesim" in line]
+    return [re.findall(r"`(snakesim[\w.*]*)`", row.split("|")[2]) for row in rows]
+
+
+def layer_of(module: str, layers: list[list[str]]) -> int | None:
+    """The first layer whose patterns name ``module`` (``snakesim.cli.*`` names the subpackage)."""
+    for index, patterns in enumerate(layers):
+        for pattern in patterns:
+            package = pattern[:-2]
+            if module == pattern or (
+                pattern.endswith(".*") and (module == package or module.startswith(f"{package}."))
+            ):
+                return index
+    return None
+
+
+def upward_imports(graph: dict[str, set[str]], layers: list[list[str]]) -> list[str]:
+    """Every import of ``graph`` (module -> the modules it imports) that points to a higher layer."""
+    return sorted(
+        f"{a} -> {b}"
+        for a, targets in graph.items()
+        for b in targets
+        if layer_of(b, layers) < layer_of(a, layers)  # type: ignore[operator]
+    )
+
+
+def package_graph() -> dict[str, set[str]]:
+    graph = {name: imports(path, known_names()) - {name} for name, path in modules().items()}
+    graph["snakesim._core"] = set()
+    return graph
+
+
+def test_imports_point_down_the_maps_layers():
+    layers = import_layers(ARCHITECTURE.read_text(encoding="utf-8"))
+    graph = package_graph()
+    unplaced = sorted(m for m in graph if layer_of(m, layers) is None)
+    assert not unplaced, f"modules in no row of docs/architecture.md's import layers: {unplaced}"
+    assert not upward_imports(graph, layers), upward_imports(graph, layers)
+
+
+def test_a_planted_upward_import_is_caught():
+    layers = import_layers(ARCHITECTURE.read_text(encoding="utf-8"))
+    graph = package_graph()
+    # An env that imports the command, a leaf that imports an agent: both point up.
+    graph["snakesim.envs.env"] = graph["snakesim.envs.env"] | {"snakesim.cli.app"}
+    graph["snakesim.files"] = graph["snakesim.files"] | {"snakesim.agents"}
+    assert upward_imports(graph, layers) == [
+        "snakesim.envs.env -> snakesim.cli.app",
+        "snakesim.files -> snakesim.agents",
+    ]
+    # And from a module's text, as the real check reads it.
+    planted = REPO / "snake-py" / "python" / "snakesim" / "envs" / "env.py"
+    text = planted.read_text() + "\n\ndef _planted():\n    from snakesim.sweeps import plan  # noqa: F401\n"
+    import tempfile
+
+    with tempfile.NamedTemporaryFile("w", suffix=".py") as f:
+        f.write(text)
+        f.flush()
+        graph["snakesim.envs.env"] = imports(Path(f.name), known_names())
+    assert "snakesim.envs.env -> snakesim.sweeps.plan" in upward_imports(graph, layers)
+
+
+#: The files the map must name: every source, test, example, fuzz target and script of the project.
+MAPPED = (
+    "bullet-sys/shim/*",
+    "*/src/**/*.rs",
+    "*/tests/**/*.rs",
+    "tests/*.rs",
+    "*/examples/*.rs",
+    "fuzz/fuzz_targets/*.rs",
+    "snake-py/python/snakesim/**/*.py",
+    "snake-py/tests/*.py",
+    "tests/reference/*.py",
+    "scripts/*",
+)
+
+
+def test_the_map_names_every_source_and_test_file():
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    files = {
+        p.relative_to(REPO).as_posix()
+        for pattern in MAPPED
+        for p in REPO.glob(pattern)
+        if p.is_file() and "target" not in p.relative_to(REPO).parts
+    }
+    # A subpackage's __init__ is the subpackage itself, which its concern's row names.
+    files = {
+        f for f in files if not f.endswith("/__init__.py") or f == "snake-py/python/snakesim/__init__.py"
+    }
+    missing = sorted(f for f in files if f"`{f}`" not in text)
+    assert not missing, f"docs/architecture.md names none of: {missing}"
