@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from snakesim.agents.loading import Agent
+from snakesim.agents.protocol import Agent
 
 
 def run_episodes(

@@ -136,12 +136,18 @@ def read_randomize(path: str | os.PathLike) -> dict:
         raise UserError(str(error)) from None
 
 
+#: The flag of each keyword argument of :func:`snakesim.agents.load_agent`: the loader's errors name
+#: its arguments, and the command names them as its user typed them.
+AGENT_FLAGS = {"joints": "--joints", "preset": "--preset", "task": "--env", "env_from": "--env-from"}
+
+
 def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLike, str]] = ()):
     """The agent the command's arguments name; UserError when one of the command's ``outputs``
-    ((path, flag), checked writable before) is a file the agent is read from, or two are one file."""
+    ((path, flag), checked writable before) is a file the agent is read from, or two are one file,
+    or when the loader refuses the arguments (naming their flags)."""
     from snakesim import extras
-    from snakesim.agents.loading import load_agent
-    from snakesim.cli.errors import check_distinct, check_writable, env_files
+    from snakesim.agents.loading import AgentError, load_agent
+    from snakesim.cli.errors import UserError, check_distinct, check_writable, env_files
 
     # One thread: a small MLP gains nothing from more, and they would compete with the env's threads.
     # (Only SB3 models use torch; native models and baselines run without the sb3 extra.)
@@ -158,14 +164,17 @@ def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLi
     if getattr(args, "randomize", None) is not None:
         # A physics distribution instead of the agent's own (checked when the env is made).
         overrides = {**(overrides or {}), "randomize": read_randomize(args.randomize)}
-    agent = load_agent(
-        args.source,
-        joints=args.joints,
-        preset=args.preset,
-        env_overrides=overrides,
-        task=getattr(args, "env", None) or "goal",
-        env_from=getattr(args, "env_from", None),
-    )
+    try:
+        agent = load_agent(
+            args.source,
+            joints=args.joints,
+            preset=args.preset,
+            env_overrides=overrides,
+            task=getattr(args, "env", None) or "goal",
+            env_from=getattr(args, "env_from", None),
+        )
+    except AgentError as error:
+        raise UserError(error.naming(AGENT_FLAGS)) from None
     inputs = [*agent.files, *env_files(agent.env_kwargs)]
     for folder in (args.source, getattr(args, "env_from", None)):
         if folder is not None and os.path.isdir(folder):

@@ -57,10 +57,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     steps = report["mean_steps_to_goal"]
     seconds = report["mean_seconds_to_goal"]
     mode = "stochastic" if args.stochastic else "deterministic"
-    trainer = {"native": "native trainer", "baseline": "hand-made controller"}.get(
-        agent.kind, f"SB3 {agent.sb3_version}"
-    )
-    label = "baseline" if agent.kind == "baseline" else f"PPO-{agent.arch}"
+    trainer, label = agent.trainer, agent.network
     low, high = report["success_rate_ci95"]
 
     def optional(value: float | None, unit: str = "") -> str:

@@ -36,7 +36,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         onnx = _output(args.onnx, "--onnx", ".onnx")
         outputs.append((onnx, "--onnx"))
     agent = load_agent(args, outputs)
-    if sb3 is not None and agent.kind != "native":
+    if sb3 is not None and not agent.exports_sb3:
         raise UserError(
             f"{agent.path} is already a Stable-Baselines3 model; --sb3 takes native runs and models "
             "(--onnx takes both)"

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from snakesim import extras
+from snakesim.agents.sb3_zip import EXPORTED_ASSIST_KEY, EXPORTED_ENV_KEY, RECORDED_FILES_KEY
 from snakesim.files import write_atomically
 from snakesim.runs.rundir import EXPORTED_STATISTICS_SUFFIX
 
@@ -30,17 +31,16 @@ def vecnormalize_path(zip_path: str | os.PathLike) -> Path:
 
 def to_sb3(agent: Any, path: str | os.PathLike) -> list[Path]:
     """Writes the native ``agent`` (see :func:`snakesim.agents.load_agent`) as an SB3 PPO zip; returns
-    the files written."""
+    the files written; ValueError for an agent that says it does not export so (``exports_sb3``)."""
     extras.require("sb3", "snakesim export --sb3")
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from snakesim.agents.loading import EXPORTED_ASSIST_KEY, EXPORTED_ENV_KEY, RECORDED_FILES_KEY
     from snakesim.envs.sb3 import SnakeVecEnv
     from snakesim.runs.policies import policy_kwargs
 
-    if agent.kind != "native":
+    if not agent.exports_sb3:
         raise ValueError(f"{agent.path} is not a native model (it is already an SB3 model)")
     env = SnakeVecEnv(1, **agent.env_kwargs)
     hyper: dict[str, Any] = {}

@@ -1,7 +1,8 @@
 """A policy as an ONNX graph, for running on the robot: ``snakesim export MODEL --onnx policy.onnx``.
 
 The graph computes, for a batch of raw observations, what a loaded agent's ``act(obs,
-deterministic=True)`` computes (:mod:`snakesim.agents.loading`), for native models and SB3 zips alike:
+deterministic=True)`` computes (:mod:`snakesim.agents.protocol`: each agent gives its ``actor``), for
+native models and SB3 zips alike:
 
 1. when the model normalises observations, ``clip((obs - mean) / sqrt(var + epsilon), -clip, clip)``
    in float64, then float32: the native policy's ``RunningMeanStd::normalize`` (snake-rl's
@@ -45,7 +46,7 @@ NATIVE_CLIP = 10.0
 #: Keys of the model's ``metadata_props``.
 METADATA_PREFIX = "snakesim."
 
-# SB3 activations (torch.nn class names, as snakesim.agents.loading accepts them) -> ONNX.
+# SB3 activations (torch.nn class names, as snakesim.agents.sb3_network accepts them) -> ONNX.
 _ACTIVATIONS = ("Tanh", "ReLU", "LeakyReLU", "ELU", "GELU", "SiLU", "Sigmoid")
 
 
@@ -97,15 +98,13 @@ def actor_of(agent: Any) -> Actor:
             f"{agent.path} was trained with steer_assist (baseline:steer shares its actions): an ONNX "
             "graph of its policy alone would not act as it does; export --sb3 keeps the assist"
         )
-    if agent.kind == "native":
-        return _native_actor(agent.policy)
-    if agent.kind == "sb3":
-        return _sb3_actor(agent.policy, agent.obs_normalizer)
-    raise ExportError(f"{agent.path} is a hand-made controller, not a model: export takes runs and models")
+    # The agent knows what it is: a model answers with its actor, a hand-made controller refuses.
+    return agent.actor()
 
 
-def _native_actor(policy: Any) -> Actor:
-    """A ``_core.NativePolicy``: tanh layers under SB3's tensor names (snake-rl's ``nn::network``)."""
+def native_actor(policy: Any, normalization: Normalization | None) -> Actor:
+    """A ``_core.NativePolicy``: tanh layers under SB3's tensor names (snake-rl's ``nn::network``),
+    after ``normalization`` (the agent's, :meth:`snakesim.agents.native.NativeAgent.normalization`)."""
     tensors = policy.tensors()
     arch = policy.net_arch
 
@@ -119,21 +118,15 @@ def _native_actor(policy: Any) -> Actor:
     layers = [take(f"features_extractor.shared_net.{2 * i}", "Tanh") for i in range(len(arch["shared"]))]
     layers += [take(f"mlp_extractor.policy_net.{2 * i}", "Tanh") for i in range(len(arch["pi"]))]
     layers.append(take("action_net", None))
-    stats = policy.obs_rms()
-    normalization = None
-    if stats is not None:
-        mean, var, _ = stats
-        normalization = Normalization(
-            np.asarray(mean, np.float64), np.asarray(var, np.float64), NATIVE_EPSILON, NATIVE_CLIP
-        )
     ones = np.ones(policy.act_dim, np.float32)
     return _checked(Actor(int(policy.obs_dim), tuple(layers), normalization, -ones, ones), policy.path)
 
 
-def _sb3_actor(policy: Any, normalizer: Any) -> Actor:
+def sb3_actor(policy: Any, normalization: Normalization | None) -> Actor:
     """An SB3 ``ActorCriticPolicy`` as the loader builds it: the policy's features extractor (SB3's
     ``FlattenExtractor`` or snakesim's ``SharedMlp``), ``mlp_extractor.policy_net``, ``action_net``;
-    with a ``VecNormalize``'s statistics, epsilon and clip when it normalises observations."""
+    after ``normalization`` (a ``VecNormalize``'s statistics, epsilon and clip when it normalises
+    observations: :meth:`snakesim.agents.sb3.SB3Agent.normalization`)."""
     if getattr(policy, "squash_output", False) or getattr(policy, "use_sde", False):
         raise ExportError("SB3 policies with squashed outputs or gSDE are not supported")
     extractor = getattr(policy, "pi_features_extractor", None)
@@ -149,15 +142,6 @@ def _sb3_actor(policy: Any, normalizer: Any) -> Actor:
     layers += _sequential([policy.action_net])
     if layers[-1].activation is not None:
         raise ExportError("the policy's action_net ends in an activation")
-    normalization = None
-    if normalizer is not None and getattr(normalizer, "norm_obs", True):
-        rms = normalizer.obs_rms
-        normalization = Normalization(
-            np.asarray(rms.mean, np.float64),
-            np.asarray(rms.var, np.float64),
-            float(normalizer.epsilon),
-            float(normalizer.clip_obs),
-        )
     space = policy.action_space
     low, high = np.asarray(space.low, np.float32), np.asarray(space.high, np.float32)
     obs_dim = int(np.prod(policy.observation_space.shape))
@@ -256,26 +240,26 @@ class _Builder:
         return out
 
     def activation(self, x: str, dense: Dense) -> str:
-        kind = dense.activation
-        if kind == "Tanh":
+        activation = dense.activation
+        if activation == "Tanh":
             return self.node("Tanh", [x])
-        if kind == "ReLU":
+        if activation == "ReLU":
             return self.node("Relu", [x])
-        if kind == "LeakyReLU":
+        if activation == "LeakyReLU":
             return self.node("LeakyRelu", [x], alpha=dense.alpha)
-        if kind == "ELU":
+        if activation == "ELU":
             return self.node("Elu", [x], alpha=dense.alpha)
-        if kind == "Sigmoid":
+        if activation == "Sigmoid":
             return self.node("Sigmoid", [x])
-        if kind == "SiLU":  # x * sigmoid(x)
+        if activation == "SiLU":  # x * sigmoid(x)
             return self.node("Mul", [x, self.node("Sigmoid", [x])], "silu")
-        if kind == "GELU":  # torch's exact GELU: x / 2 * (1 + erf(x / sqrt(2)))
+        if activation == "GELU":  # torch's exact GELU: x / 2 * (1 + erf(x / sqrt(2)))
             scaled = self.node("Mul", [x, self.constant("inv_sqrt2", np.array(1 / math.sqrt(2), np.float32))])
             erf = self.node("Erf", [scaled])
             one = self.node("Add", [erf, self.constant("one", np.array(1.0, np.float32))])
             half = self.node("Mul", [x, self.constant("half", np.array(0.5, np.float32))])
             return self.node("Mul", [half, one], "gelu")
-        raise ExportError(f"unsupported activation {kind}")
+        raise ExportError(f"unsupported activation {activation}")
 
 
 def build_model(actor: Actor, metadata: Mapping[str, str] | None = None, doc: str = "") -> Any:
