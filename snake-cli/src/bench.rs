@@ -257,7 +257,8 @@ fn bench_robot(args: &BenchArgs, path: &Path) -> Result<()> {
 /// Runs the benchmark and prints a table.
 pub fn bench(args: &BenchArgs) -> Result<()> {
     let max_joints = snake_core::limits::MAX_JOINTS;
-    if args.joints.is_empty() || args.joints.iter().any(|&j| j == 0 || j > max_joints) {
+    let in_range = |&j: &usize| snake_core::limits::check_joints(j).is_ok();
+    if args.joints.is_empty() || !args.joints.iter().all(in_range) {
         bail!("--joints needs one or more counts, each in [1, {max_joints}]");
     }
     if args.joints.len() > MAX_BENCH_SIZES {

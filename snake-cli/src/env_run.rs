@@ -115,9 +115,6 @@ pub fn run(args: &EnvArgs) -> Result<()> {
             args.episodes
         );
     }
-    if args.joints == Some(0) {
-        bail!("--joints must be at least 1, got 0");
-    }
     let keywords = args.keywords()?;
     let config = snake_rl::config::env_from_keywords(&keywords).map_err(|e| {
         // Name the flag where one set the keyword, as the other commands do.

@@ -266,15 +266,18 @@ impl RunPlan {
         let config_dt = SnakeConfig::default().dt;
         let body = match &args.robot {
             None => {
-                if args.joints < 1 {
-                    bail!("--joints must be at least 1, got {}", args.joints);
-                }
                 let mut config = args.preset.config(args.joints);
                 config.skin_friction = args.skin_friction.map(|skin| SkinFriction {
                     axis: args.skin_axis,
                     ..skin
                 });
-                config.validate()?;
+                // The joint count's one check (snake_core::limits::check_joints), named as the flag.
+                config.validate().map_err(|e| match e {
+                    snake_core::Error::InvalidArgument(m) if m.key() == Some("joints") => {
+                        anyhow::anyhow!("--joints: {}", m.detail())
+                    }
+                    other => other.into(),
+                })?;
                 BodyPlan::Cubes {
                     config,
                     preset: args.preset,

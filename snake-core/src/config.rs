@@ -9,6 +9,12 @@ use crate::skin::{SkinAxis, SkinFriction};
 /// Most joints a snake may have (defined with every other limit in [`crate::limits`]).
 pub use crate::limits::MAX_JOINTS;
 
+/// Joints of the snake when none are asked for (the paper's 5): the env keywords' and a run's default.
+pub const DEFAULT_JOINTS: usize = 5;
+
+/// The preset when none is asked for (the paper's masses).
+pub const DEFAULT_PRESET: Preset = Preset::Paper;
+
 /// Every physical parameter of the simulated snake, with the paper's defaults.
 ///
 /// The snake is `joints + 1` cubes in a row along +y (the base first, the tail last), joined by
@@ -48,7 +54,7 @@ pub struct SnakeConfig {
 
 impl Default for SnakeConfig {
     fn default() -> Self {
-        Preset::Paper.config(5)
+        DEFAULT_PRESET.config(DEFAULT_JOINTS)
     }
 }
 
@@ -132,18 +138,7 @@ impl SnakeConfig {
 
     /// Checks every parameter; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
-        if self.joints < 1 {
-            return Err(invalid_at(
-                "joints",
-                format!("must be at least 1, got {}", self.joints),
-            ));
-        }
-        if self.joints > MAX_JOINTS {
-            return Err(invalid_at(
-                "joints",
-                format!("must be at most {MAX_JOINTS}, got {}", self.joints),
-            ));
-        }
+        crate::limits::check_joints(self.joints)?;
         let positive = [
             ("half_extent", self.half_extent),
             ("base_mass", self.base_mass),

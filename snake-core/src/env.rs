@@ -5,6 +5,7 @@ mod action;
 mod config;
 mod course;
 mod height_map;
+pub mod keywords;
 mod observation;
 mod randomize;
 mod reward;

@@ -43,6 +43,7 @@ pub mod env;
 pub mod error;
 pub mod files;
 pub mod gait;
+pub mod keys;
 pub mod limits;
 pub mod math;
 pub mod recorded;
@@ -59,6 +60,7 @@ pub use body::Body;
 pub use config::{Preset, SnakeConfig};
 pub use controllers::{AssistedEnv, ControlledEnv, HandController, SteerAssist};
 pub use drawing::ShapeDrawing;
+pub use env::keywords::{env_from_keywords, env_keyword_defaults};
 pub use env::{
     route_distance, ActionConfig, ActionMode, Capsule, Craters, Disc, DistancePrecision, EnvConfig,
     GoalDistribution, Info, Layout, ObservationLayout, ObservationPart, ObservationStructure,

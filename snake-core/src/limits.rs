@@ -150,6 +150,11 @@ pub const MAX_SKIN_FRICTION: f64 = 10.0;
 /// servos turn at ~5-10 rad/s), so a larger value is a typo rather than a servo.
 pub const MAX_MOTOR_VELOCITY: f64 = 1.0e4;
 
+/// Largest motor gain (`motors.kp`, `motors.kd`) or friction coefficient of a robot file's
+/// (anisotropic, skin) a calibration fit may set (`snakesim calibrate`, [`crate::run_targets`]): far
+/// beyond any servo's or surface's, small enough that the physics stays finite.
+pub const MAX_FIT_VALUE: f64 = 1.0e6;
+
 /// Most env steps an action may reach the motors late (`randomize.latency_steps`): 32 env steps are
 /// 0.13 s at the default 240 Hz, far beyond a real servo bus's few milliseconds; the delay line holds
 /// this many actions per env.
@@ -215,34 +220,74 @@ pub fn check_joints(joints: usize) -> crate::Result<()> {
     }
 }
 
-/// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`.
+/// Checks that `value` lies in `[low, high]` (and is finite); the error names `what`. With the
+/// other checks below, the one range check of the Rust crates: every range a value must lie in is
+/// checked, and worded, here.
 pub fn check_range(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
-    if value.is_finite() && (low..=high).contains(&value) {
-        Ok(())
-    } else {
-        Err(crate::error::invalid(format!(
-            "{what} must be in [{}, {}], got {}",
-            short(low),
-            short(high),
-            short(value)
-        )))
-    }
+    range_problem(value, low, high, false).map_or(Ok(()), |detail| {
+        Err(crate::error::invalid(format!("{what} {detail}")))
+    })
 }
 
 /// [`check_range`] for the configuration value at the key path `key`: the error carries the path
 /// ([`crate::Invalid::key`]) apart from what is wrong with it.
 pub fn check_key_range(key: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
-    check_range(key, value, low, high).map_err(|_| {
-        crate::error::invalid_at(
-            key,
-            format!(
-                "must be in [{}, {}], got {}",
-                short(low),
-                short(high),
-                short(value)
-            ),
-        )
+    range_problem(value, low, high, false)
+        .map_or(Ok(()), |detail| Err(crate::error::invalid_at(key, detail)))
+}
+
+/// [`check_range`] over `(low, high]`: `low` itself refused (a size, a scale, a gain that must be
+/// positive).
+pub fn check_range_above(what: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
+    range_problem(value, low, high, true).map_or(Ok(()), |detail| {
+        Err(crate::error::invalid(format!("{what} {detail}")))
     })
+}
+
+/// [`check_key_range`] over `(low, high]`.
+pub fn check_key_range_above(key: &str, value: f64, low: f64, high: f64) -> crate::Result<()> {
+    range_problem(value, low, high, true)
+        .map_or(Ok(()), |detail| Err(crate::error::invalid_at(key, detail)))
+}
+
+/// Checks a range `[low, high]` given for the value at the key path `key` (a randomized scale drawn
+/// from it): both ends finite, `low <= high`, and both within `[bound_low, bound_high]`.
+pub fn check_key_interval(
+    key: &str,
+    [low, high]: [f64; 2],
+    bound_low: f64,
+    bound_high: f64,
+) -> crate::Result<()> {
+    let shown = format!("[{}, {}]", short(low), short(high));
+    let detail = if !(low.is_finite() && high.is_finite()) {
+        format!("must be finite, got {shown}")
+    } else if low > high {
+        format!("must have low <= high, got {shown}")
+    } else if low < bound_low || high > bound_high {
+        format!(
+            "must lie within {} <= low <= high <= {}, got {shown}",
+            short(bound_low),
+            short(bound_high)
+        )
+    } else {
+        return Ok(());
+    };
+    Err(crate::error::invalid_at(key, detail))
+}
+
+/// What is wrong with `value` against `[low, high]` (`(low, high]` with `low_open`), if anything.
+fn range_problem(value: f64, low: f64, high: f64, low_open: bool) -> Option<String> {
+    let above_low = if low_open { value > low } else { value >= low };
+    if value.is_finite() && above_low && value <= high {
+        return None;
+    }
+    Some(format!(
+        "must be in {}{}, {}], got {}",
+        if low_open { '(' } else { '[' },
+        short(low),
+        short(high),
+        short(value)
+    ))
 }
 
 /// [`check_position`] for the configuration value at the key path `key`.
@@ -296,7 +341,10 @@ pub const ALL: &[(&str, LimitValue)] = {
         ("reward_weight", Float(MAX_REWARD_WEIGHT)),
         ("action_scale", Float(MAX_ACTION_SCALE)),
         ("episode_steps", Int(MAX_EPISODE_STEPS)),
-        ("physics_steps_per_env_step", Int(MAX_PHYSICS_STEPS_PER_ENV_STEP as u64)),
+        (
+            "physics_steps_per_env_step",
+            Int(MAX_PHYSICS_STEPS_PER_ENV_STEP as u64),
+        ),
         ("envs", Int(MAX_ENVS as u64)),
         ("run_seconds", Float(MAX_RUN_SECONDS)),
         ("recording_seconds", Float(MAX_RECORDING_SECONDS)),
@@ -339,6 +387,7 @@ pub const ALL: &[(&str, LimitValue)] = {
         ("world_friction", Float(MAX_WORLD_FRICTION)),
         ("skin_friction", Float(MAX_SKIN_FRICTION)),
         ("motor_velocity", Float(MAX_MOTOR_VELOCITY)),
+        ("fit_value", Float(MAX_FIT_VALUE)),
         ("latency_steps", Int(MAX_LATENCY_STEPS as u64)),
         ("obs_noise", Float(MAX_OBS_NOISE)),
         ("physics_scale_max", Float(MAX_PHYSICS_SCALE)),
@@ -360,10 +409,14 @@ mod table_tests {
         let source = include_str!("limits.rs");
         let table = source.split("pub const ALL").nth(1).expect("the table");
         for line in source.lines() {
-            let Some(rest) = line.strip_prefix("pub const ") else { continue };
+            let Some(rest) = line.strip_prefix("pub const ") else {
+                continue;
+            };
             let name = rest.split(':').next().unwrap_or_default();
             if name != "ALL" {
-                let named = [")", " as", "."].iter().any(|end| table.contains(&format!("({name}{end}")));
+                let named = [")", " as", "."]
+                    .iter()
+                    .any(|end| table.contains(&format!("({name}{end}")));
                 assert!(named, "{name} is not in limits::ALL");
             }
         }

@@ -13,7 +13,8 @@ use serde::{Deserialize, Serialize};
 use crate::env::Physics;
 use crate::error::{invalid_at, Result};
 use crate::limits::{
-    short, MAX_MOTOR_VELOCITY, MAX_PHYSICS_SCALE, MAX_TARGET_ROWS, MAX_WORLD_FRICTION,
+    check_key_range, check_key_range_above, MAX_FIT_VALUE, MAX_MOTOR_VELOCITY, MAX_PHYSICS_SCALE,
+    MAX_TARGET_ROWS, MAX_WORLD_FRICTION,
 };
 use crate::world::Dynamics;
 use crate::world_file::WorldSpec;
@@ -92,24 +93,6 @@ pub struct Overrides {
     pub mass_scale: Option<f64>,
 }
 
-fn check(key: &str, v: Option<f64>, low: f64, high: f64, open_low: bool) -> Result<()> {
-    match v {
-        Some(x) if !(x.is_finite() && x <= high && if open_low { x > low } else { x >= low }) => {
-            let left = if open_low { '(' } else { '[' };
-            Err(invalid_at(
-                key,
-                format!(
-                    "must be in {left}{}, {}], got {}",
-                    short(low),
-                    short(high),
-                    short(x)
-                ),
-            ))
-        }
-        _ => Ok(()),
-    }
-}
-
 impl Overrides {
     /// Reads an object of fit keys (`_core.simulate_robot`'s `overrides_json`); the error is one line
     /// (a key of any characters is quoted escaped), naming `overrides`. Values are not checked here:
@@ -120,29 +103,21 @@ impl Overrides {
 
     /// Checks every value's range; the message names the key.
     pub fn validate(&self) -> Result<()> {
-        let big = 1e6;
-        check("motors.kp", self.kp, 0.0, big, false)?;
-        check("motors.kd", self.kd, 0.0, big, false)?;
-        check(
-            "motors.max_velocity",
-            self.max_velocity,
-            0.0,
-            MAX_MOTOR_VELOCITY,
-            true,
-        )?;
-        check(
-            "ground_friction",
-            self.ground_friction,
-            0.0,
-            MAX_WORLD_FRICTION,
-            false,
-        )?;
-        check(
+        // `[0, high]`, or `(0, high]` for a value that must be positive; an absent value is not set.
+        let at_least_0 = |key: &str, v: Option<f64>, high: f64| {
+            v.map_or(Ok(()), |x| check_key_range(key, x, 0.0, high))
+        };
+        let above_0 = |key: &str, v: Option<f64>, high: f64| {
+            v.map_or(Ok(()), |x| check_key_range_above(key, x, 0.0, high))
+        };
+        at_least_0("motors.kp", self.kp, MAX_FIT_VALUE)?;
+        at_least_0("motors.kd", self.kd, MAX_FIT_VALUE)?;
+        above_0("motors.max_velocity", self.max_velocity, MAX_MOTOR_VELOCITY)?;
+        at_least_0("ground_friction", self.ground_friction, MAX_WORLD_FRICTION)?;
+        at_least_0(
             "lateral_friction",
             self.lateral_friction,
-            0.0,
             MAX_WORLD_FRICTION,
-            false,
         )?;
         for (key, v) in [
             ("anisotropic_friction.x", self.anisotropic_x),
@@ -152,9 +127,9 @@ impl Overrides {
             ("skin_friction.backward", self.skin_backward),
             ("skin_friction.transverse", self.skin_transverse),
         ] {
-            check(key, v, 0.0, big, false)?;
+            at_least_0(key, v, MAX_FIT_VALUE)?;
         }
-        check("mass_scale", self.mass_scale, 0.0, MAX_PHYSICS_SCALE, true)
+        above_0("mass_scale", self.mass_scale, MAX_PHYSICS_SCALE)
     }
 
     /// Writes the robot-file parameters into `spec` and the ground friction into `world`.

@@ -45,7 +45,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
 use crate::limits::{
-    check_position, check_range, MAX_HEIGHTFIELD_BYTES, MAX_HEIGHTFIELD_SAMPLES,
+    check_position, check_range, check_range_above, MAX_HEIGHTFIELD_BYTES, MAX_HEIGHTFIELD_SAMPLES,
     MAX_HEIGHTFIELD_SIDE, MAX_NOISE_LATTICE, MAX_OBSTACLES, MAX_OBSTACLE_SIZE, MAX_SLOPE_DEGREES,
     MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION, MAX_YAW,
 };
@@ -430,13 +430,7 @@ fn check_friction(what: &str, v: Option<f64>) -> Result<()> {
 }
 
 fn check_size(what: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 && v <= MAX_OBSTACLE_SIZE {
-        Ok(())
-    } else {
-        Err(invalid(format!(
-            "{what} must be in (0, {MAX_OBSTACLE_SIZE}] m, got {v:?}"
-        )))
-    }
+    check_range_above(what, v, 0.0, MAX_OBSTACLE_SIZE)
 }
 
 fn check_point(what: &str, p: [f64; 3]) -> Result<()> {

@@ -35,15 +35,26 @@ fn config_error(e: snake_rl::config::ConfigError) -> PyErr {
     }
 }
 
+/// A configuration error as Python expects it (see [`config_error`]), from snake-core.
+fn keyword_error(e: snake_core::Error) -> PyErr {
+    let message = e.message();
+    if message.contains("invalid type:") {
+        PyTypeError::new_err(message)
+    } else {
+        PyValueError::new_err(message)
+    }
+}
+
 /// Builds an [`EnvConfig`] from the keywords of `snakesim.SnakeEnv` as JSON (`joints`, `preset`,
-/// `snake` overrides, every other key an `EnvConfig` field), checked by snake-rl's configuration.
+/// `snake` overrides, every other key an `EnvConfig` field), checked where the env's keywords are
+/// defined ([`snake_core::env::keywords`]).
 fn parse_config(json: &str) -> PyResult<EnvConfig> {
     let value: serde_json::Value = serde_json::from_str(json)
         .map_err(|e| PyValueError::new_err(format!("invalid env keywords: {e}")))?;
     let serde_json::Value::Object(keywords) = value else {
         return Err(PyTypeError::new_err("env keywords must be a mapping"));
     };
-    snake_rl::config::env_from_keywords(&keywords).map_err(config_error)
+    snake_core::env::keywords::env_from_keywords(&keywords).map_err(keyword_error)
 }
 
 fn info_dict<'py>(py: Python<'py>, info: &Info) -> PyResult<Bound<'py, PyDict>> {

@@ -55,9 +55,9 @@ fn run_config_defaults() -> String {
 #[pyfunction]
 #[pyo3(signature = (task = "paper"))]
 fn env_keyword_defaults(task: &str) -> PyResult<String> {
-    let task: snake_core::env::Task =
-        config::from_value(Value::from(task), "task").map_err(|e| PyValueError::new_err(e.0))?;
-    Ok(Value::Object(config::env_keyword_defaults(task)).to_string())
+    let task: snake_core::env::Task = snake_core::keys::from_value(Value::from(task), "task")
+        .map_err(|e| PyValueError::new_err(e.message()))?;
+    Ok(Value::Object(snake_core::env::keywords::env_keyword_defaults(task)).to_string())
 }
 
 /// A checked run configuration from layers (JSON mappings over the defaults, lowest first), as JSON.

@@ -23,8 +23,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid_at, Result};
 use crate::limits::{
-    short, MAX_LATENCY_STEPS, MAX_OBS_NOISE, MAX_PHYSICS_SCALE, MAX_WORLD_FRICTION,
-    MIN_PHYSICS_SCALE,
+    check_key_interval, short, MAX_LATENCY_STEPS, MAX_OBS_NOISE, MAX_PHYSICS_SCALE,
+    MAX_WORLD_FRICTION, MIN_PHYSICS_SCALE,
 };
 use crate::Body;
 
@@ -158,33 +158,20 @@ impl Randomize {
             ("skin_friction_scale", self.skin_friction_scale, scale),
         ] {
             let Some([low, high]) = range else { continue };
-            let shown = format!("[{}, {}]", short(low), short(high));
-            if !(low.is_finite() && high.is_finite()) {
-                return Err(invalid_at(
-                    format!("randomize.{key}"),
-                    format!("must be finite, got {shown}"),
-                ));
-            }
-            if low > high {
-                return Err(invalid_at(
-                    format!("randomize.{key}"),
-                    format!("must have low <= high, got {shown}"),
-                ));
-            }
-            if low < low_bound || high > high_bound {
-                return Err(invalid_at(
-                    format!("randomize.{key}"),
-                    format!(
-                        "must lie within {} <= low <= high <= {}, got {shown}",
-                        short(low_bound),
-                        short(high_bound)
-                    ),
-                ));
-            }
+            check_key_interval(
+                &format!("randomize.{key}"),
+                [low, high],
+                low_bound,
+                high_bound,
+            )?;
             if key == "latency_steps" && (low.fract() != 0.0 || high.fract() != 0.0) {
                 return Err(invalid_at(
                     "randomize.latency_steps",
-                    format!("must be whole env steps, got {shown}"),
+                    format!(
+                        "must be whole env steps, got [{}, {}]",
+                        short(low),
+                        short(high)
+                    ),
                 ));
             }
         }

@@ -11,8 +11,9 @@ use serde::{Deserialize, Serialize};
 use super::route::{Disc, Segment};
 use crate::error::{invalid_at, Result};
 use crate::limits::{
-    check_key_range, MAX_CRATERS, MAX_HEIGHTFIELD_SAMPLES, MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES,
-    MAX_OBSTACLE_SIZE, MAX_RIDGES, MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION,
+    check_key_range, check_key_range_above, MAX_CRATERS, MAX_HEIGHTFIELD_SAMPLES,
+    MAX_HEIGHTFIELD_SIDE, MAX_OBSTACLES, MAX_OBSTACLE_SIZE, MAX_RIDGES, MAX_TERRAIN_HEIGHT,
+    MAX_WORLD_FRICTION,
 };
 use crate::math::StartPose;
 use crate::world_file::{
@@ -449,14 +450,7 @@ fn line_to_goal(start: &StartPose, goal: (f64, f64)) -> (f64, (f64, f64)) {
 }
 
 fn size(what: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 && v <= MAX_OBSTACLE_SIZE {
-        Ok(())
-    } else {
-        Err(invalid_at(
-            what,
-            format!("must be in (0, {MAX_OBSTACLE_SIZE}] m, got {v:?}"),
-        ))
-    }
+    check_key_range_above(what, v, 0.0, MAX_OBSTACLE_SIZE)
 }
 
 fn friction(what: &str, v: Option<f64>) -> Result<()> {
