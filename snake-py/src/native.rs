@@ -597,51 +597,47 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// Every limit on sizes, ranges and durations (snake-core's and the run configuration's), by name,
-/// for the Python side's checks and messages.
+/// for the Python side's checks and messages: snake-core's table (`snake_core::limits::ALL`) whole,
+/// then the run configuration's limits named by the same rule (`MAX_X` is `x`, a range `x_min` and
+/// `x_max`).
 fn limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-    use snake_core::limits as core;
+    use snake_core::limits::{LimitValue, ALL};
     use snake_rl::config::limits as run;
+    use LimitValue::{Float, Int};
+    let run_limits: &[(&str, LimitValue)] = &[
+        ("timesteps", Int(run::MAX_TIMESTEPS)),
+        ("eval_episodes", Int(run::MAX_EVAL_EPISODES)),
+        ("threads", Int(run::MAX_THREADS)),
+        ("rollout_bytes", Int(run::MAX_ROLLOUT_BYTES)),
+        ("epochs", Int(run::MAX_EPOCHS)),
+        ("seed", Int(run::MAX_SEED)),
+        ("net_layers", Int(run::MAX_NET_LAYERS)),
+        ("net_width", Int(run::MAX_NET_WIDTH)),
+        ("log_std_init_min", Float(run::LOG_STD_INIT[0])),
+        ("log_std_init_max", Float(run::LOG_STD_INIT[1])),
+        ("init_steps", Int(run::MAX_INIT_STEPS)),
+        ("init_bytes", Int(run::MAX_INIT_BYTES)),
+        ("init_batch", Int(run::MAX_INIT_BATCH)),
+        ("anchor_weight", Float(run::MAX_ANCHOR_WEIGHT)),
+        ("bench_seconds", Float(run::MAX_BENCH_SECONDS)),
+        ("bench_sizes", Int(run::MAX_BENCH_SIZES as u64)),
+        ("bench_repeats", Int(run::MAX_BENCH_REPEATS as u64)),
+        ("sweep_seeds", Int(run::MAX_SWEEP_SEEDS)),
+        ("sweep_trials", Int(run::MAX_SWEEP_TRIALS)),
+        ("grid_values", Int(run::MAX_GRID_VALUES)),
+        ("trial_failures", Int(run::MAX_TRIAL_FAILURES)),
+        ("search_keys", Int(run::MAX_SEARCH_KEYS)),
+        ("trial_name", Int(run::MAX_TRIAL_NAME)),
+    ];
     let d = PyDict::new(py);
-    d.set_item("joints", core::MAX_JOINTS)?;
-    d.set_item("position", core::MAX_POSITION)?;
-    d.set_item("start_height", core::MAX_START_HEIGHT)?;
-    d.set_item("yaw", core::MAX_YAW)?;
-    d.set_item("reward_weight", core::MAX_REWARD_WEIGHT)?;
-    d.set_item("action_scale", core::MAX_ACTION_SCALE)?;
-    d.set_item("episode_steps", core::MAX_EPISODE_STEPS)?;
-    d.set_item(
-        "physics_steps_per_env_step",
-        core::MAX_PHYSICS_STEPS_PER_ENV_STEP,
-    )?;
-    d.set_item("envs", core::MAX_ENVS)?;
-    d.set_item("run_seconds", core::MAX_RUN_SECONDS)?;
-    d.set_item("recording_seconds", core::MAX_RECORDING_SECONDS)?;
-    d.set_item("timesteps", run::MAX_TIMESTEPS)?;
-    d.set_item("eval_episodes", run::MAX_EVAL_EPISODES)?;
-    d.set_item("threads", run::MAX_THREADS)?;
-    d.set_item("seed", run::MAX_SEED)?;
-    d.set_item("net_layers", run::MAX_NET_LAYERS)?;
-    d.set_item("net_width", run::MAX_NET_WIDTH)?;
-    d.set_item("log_std_init_min", run::LOG_STD_INIT[0])?;
-    d.set_item("log_std_init_max", run::LOG_STD_INIT[1])?;
-    d.set_item("bench_seconds", run::MAX_BENCH_SECONDS)?;
-    d.set_item("space_size", core::MAX_SPACE_SIZE)?;
-    d.set_item("replay_frames", core::MAX_REPLAY_FRAMES)?;
-    d.set_item("replay_fps_min", core::REPLAY_FPS.0)?;
-    d.set_item("replay_fps_max", core::REPLAY_FPS.1)?;
-    d.set_item("replay_panels", core::MAX_REPLAY_PANELS)?;
-    d.set_item("recording_episodes", core::MAX_RECORDING_EPISODES)?;
-    d.set_item("sweep_seeds", run::MAX_SWEEP_SEEDS)?;
-    d.set_item("sweep_trials", run::MAX_SWEEP_TRIALS)?;
-    d.set_item("grid_values", run::MAX_GRID_VALUES)?;
-    d.set_item("trial_failures", run::MAX_TRIAL_FAILURES)?;
-    d.set_item("search_keys", run::MAX_SEARCH_KEYS)?;
-    d.set_item("trial_name", run::MAX_TRIAL_NAME)?;
-    d.set_item("urdf_bytes", core::MAX_URDF_BYTES)?;
-    d.set_item("model_bytes", core::MAX_MODEL_BYTES)?;
-    d.set_item("config_bytes", core::MAX_CONFIG_BYTES)?;
-    d.set_item("csv_bytes", core::MAX_CSV_BYTES)?;
-    d.set_item("target_rows", core::MAX_TARGET_ROWS)?;
-    d.set_item("error_chars", core::MAX_ERROR_CHARS)?;
+    for (name, value) in ALL.iter().chain(run_limits) {
+        if d.contains(*name)? {
+            return Err(PyValueError::new_err(format!("limit {name} named twice")));
+        }
+        match *value {
+            Int(n) => d.set_item(*name, n)?,
+            Float(x) => d.set_item(*name, x)?,
+        }
+    }
     Ok(d)
 }
