@@ -155,6 +155,13 @@ pub const MAX_MOTOR_VELOCITY: f64 = 1.0e4;
 /// beyond any servo's or surface's, small enough that the physics stays finite.
 pub const MAX_FIT_VALUE: f64 = 1.0e6;
 
+/// Most simulations of one calibration (`snakesim calibrate --max-evals`): 100,000 runs of an 8 s
+/// log take about a day on one core, far beyond any fit that converges.
+pub const MAX_CALIBRATION_EVALS: u64 = 100_000;
+
+/// Most processes that simulate a calibration's candidates at once (`snakesim calibrate --workers`).
+pub const MAX_CALIBRATION_WORKERS: u64 = 256;
+
 /// Most env steps an action may reach the motors late (`randomize.latency_steps`): 32 env steps are
 /// 0.13 s at the default 240 Hz, far beyond a real servo bus's few milliseconds; the delay line holds
 /// this many actions per env.
@@ -388,6 +395,8 @@ pub const ALL: &[(&str, LimitValue)] = {
         ("skin_friction", Float(MAX_SKIN_FRICTION)),
         ("motor_velocity", Float(MAX_MOTOR_VELOCITY)),
         ("fit_value", Float(MAX_FIT_VALUE)),
+        ("calibration_evals", Int(MAX_CALIBRATION_EVALS)),
+        ("calibration_workers", Int(MAX_CALIBRATION_WORKERS)),
         ("latency_steps", Int(MAX_LATENCY_STEPS as u64)),
         ("obs_noise", Float(MAX_OBS_NOISE)),
         ("physics_scale_max", Float(MAX_PHYSICS_SCALE)),

@@ -17,35 +17,19 @@ what differs between formats is a method of it, never a branch on a name:
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
+from snakesim.runs.arguments import ArgumentError, Keyword
 
-@dataclasses.dataclass(frozen=True)
-class Keyword:
-    """A keyword argument of :func:`snakesim.agents.load_agent` named in an :class:`AgentError`."""
-
-    name: str
+__all__ = ["Agent", "AgentError", "Keyword", "first_line"]
 
 
-class AgentError(ValueError):
-    """A model or run directory that cannot be used; the message says why.
-
-    A message about the loader's own arguments names them by their Python names (``env_from``);
-    :meth:`naming` gives it with the names a caller uses for them (a command's flags, ``--env-from``),
-    so the library names no flag and a command names its own."""
-
-    def __init__(self, *parts: str | Keyword) -> None:
-        self.parts = parts
-        super().__init__("".join(p.name if isinstance(p, Keyword) else p for p in parts))
-
-    def naming(self, names: Mapping[str, str]) -> str:
-        """The message with each keyword argument named as ``names`` says (others as they are)."""
-        if not self.parts:
-            return str(self)
-        return "".join(names.get(p.name, p.name) if isinstance(p, Keyword) else p for p in self.parts)
+class AgentError(ArgumentError):
+    """A model or run directory that cannot be used; the message says why. A message about the
+    loader's own arguments names them by their Python names (``env_from``); :meth:`naming` gives it
+    with the names a caller uses for them (a command's flags, ``--env-from``)."""
 
 
 def first_line(error: BaseException, limit: int = 160) -> str:

@@ -20,6 +20,10 @@ from snakesim.cli.errors import UserError, check_distinct, check_writable
 from snakesim.files import output_kind
 from snakesim.limits import LIMITS
 
+#: The flags that give ``snakesim.runs.calibrate``'s arguments: its errors name the arguments, the
+#: command its flags.
+CALIBRATE_FLAGS = {"fit": "--fit", "max_evals": "--max-evals", "targets": "--targets", "log": "--log"}
+
 #: The figure formats of ``--plot``, by the name's extension (as ``snakesim plot``).
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -188,8 +192,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from snakesim.runs.calibrate import plot as draw
 
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    if not 1 <= workers <= 256:
-        raise UserError(f"--workers must be in [1, 256], got {short_int(workers)}")
+    most = LIMITS["calibration_workers"]
+    if not 1 <= workers <= most:
+        raise UserError(f"--workers must be in [1, {most}], got {short_int(workers)}")
     if not 0 <= args.seed <= LIMITS["seed"]:
         raise UserError(f"--seed must be in [0, {LIMITS['seed']}], got {short_int(args.seed)}")
     image_format = None
@@ -222,7 +227,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             except (ValueError, RuntimeError, OSError) as error:
                 raise CalibrationError(f"--world {args.world}: {error}") from None
     except CalibrationError as error:
-        raise UserError(str(error)) from None
+        raise UserError(error.naming(CALIBRATE_FLAGS)) from None
     with _Outputs(outputs, inputs) as out:
         try:
             targets = read_targets(args.targets, joints)
@@ -260,7 +265,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                 print()
             yaml_text = fitted_robot_yaml(args.robot, result["fitted"], args.out)
         except CalibrationError as error:
-            raise UserError(str(error)) from None
+            raise UserError(error.naming(CALIBRATE_FLAGS)) from None
         result.update(robot=str(args.robot), targets=str(args.targets), log=str(args.log), world=args.world)
         text = json.dumps(result, indent=2, allow_nan=False) + "\n"
         try:

@@ -52,8 +52,9 @@ import numpy as np
 from snakesim import _core
 from snakesim.files import open_regular, read_text
 from snakesim.limits import LIMITS
+from snakesim.runs.arguments import ArgumentError, Keyword
 
-#: The keys ``--fit`` takes (snake-core's ``run_targets::Overrides``).
+#: The keys ``fit`` takes (``--fit`` of the command) (snake-core's ``run_targets::Overrides``).
 FIT_KEYS: tuple[str, ...] = (
     "motors.kp",
     "motors.kd",
@@ -70,8 +71,8 @@ FIT_KEYS: tuple[str, ...] = (
 )
 #: Keys a robot file cannot hold: reported in the JSON and as a comment of the fitted robot file.
 NOT_IN_ROBOT_FILE = ("ground_friction", "lateral_friction", "mass_scale")
-#: Most simulations of one calibration (``--max-evals``).
-MAX_EVALS = 100_000
+#: Most simulations of one calibration (``max_evals``).
+MAX_EVALS = LIMITS["calibration_evals"]
 POSITION_SCALE = 0.01  # m
 ANGLE_SCALE = 0.001  # rad
 BASE_COLUMNS = ("step", "t", "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
@@ -87,8 +88,13 @@ LINE_CHARS = 1 << 20
 FAILED = 1e12
 
 
-class CalibrationError(ValueError):
-    """Bad input: the message names the file or key and the problem."""
+class CalibrationError(ArgumentError):
+    """Bad input: the message names the file or key and the problem, and the argument it came in by
+    with its Python name (``fit``, ``max_evals``, ``targets``, ``log``); ``snakesim calibrate`` names
+    the flag instead (:meth:`~snakesim.runs.arguments.ArgumentError.naming`)."""
+
+
+FIT, MAX_EVALS_ARG, TARGETS, LOG = Keyword("fit"), Keyword("max_evals"), Keyword("targets"), Keyword("log")
 
 
 def parse_fit(items: Sequence[str]) -> dict[str, tuple[float, float]]:
@@ -98,27 +104,27 @@ def parse_fit(items: Sequence[str]) -> dict[str, tuple[float, float]]:
         key, eq, rng = item.partition("=")
         key = key.strip()
         if not eq or ":" not in rng:
-            raise CalibrationError(f"--fit {item!r}: expected KEY=LOW:HIGH")
+            raise CalibrationError(FIT, f" {item!r}: expected KEY=LOW:HIGH")
         if key not in FIT_KEYS:
-            raise CalibrationError(f"--fit {key!r}: unknown key (known: {', '.join(FIT_KEYS)})")
+            raise CalibrationError(FIT, f" {key!r}: unknown key (known: {', '.join(FIT_KEYS)})")
         if key in bounds:
-            raise CalibrationError(f"--fit {key}: given twice")
+            raise CalibrationError(FIT, f" {key}: given twice")
         low_s, _, high_s = rng.partition(":")
         try:
             low, high = float(low_s), float(high_s)
         except ValueError:
-            raise CalibrationError(f"--fit {key}: {rng!r} is not LOW:HIGH numbers") from None
+            raise CalibrationError(FIT, f" {key}: {rng!r} is not LOW:HIGH numbers") from None
         if not (math.isfinite(low) and math.isfinite(high)):
-            raise CalibrationError(f"--fit {key}: bounds must be finite, got {low!r}:{high!r}")
+            raise CalibrationError(FIT, f" {key}: bounds must be finite, got {low!r}:{high!r}")
         if not low < high:
             raise CalibrationError(
-                f"--fit {key}: the lower bound {low!r} is not below the upper bound {high!r}"
+                FIT, f" {key}: the lower bound {low!r} is not below the upper bound {high!r}"
             )
         if low < 0:
-            raise CalibrationError(f"--fit {key}: bounds must be >= 0, got {low!r}:{high!r}")
+            raise CalibrationError(FIT, f" {key}: bounds must be >= 0, got {low!r}:{high!r}")
         bounds[key] = (low, high)
     if not bounds:
-        raise CalibrationError("give at least one --fit KEY=LOW:HIGH")
+        raise CalibrationError("give at least one ", FIT, " KEY=LOW:HIGH")
     return bounds
 
 
@@ -149,7 +155,7 @@ def _numbers(cells: list[str], file: str, line: int, names: Sequence[str], bound
     raise AssertionError("unreachable: some cell was refused")
 
 
-def _lines(path: str | os.PathLike, what: str) -> Iterator[tuple[int, list[str]]]:
+def _lines(path: str | os.PathLike, what: Keyword) -> Iterator[tuple[int, list[str]]]:
     """(line number, stripped cells) of each non-blank line of a CSV, read a line at a time: a regular
     file of at most ``LIMITS['csv_bytes']``, UTF-8, lines of at most :data:`LINE_CHARS`;
     CalibrationError naming the file (and line) otherwise."""
@@ -157,7 +163,7 @@ def _lines(path: str | os.PathLike, what: str) -> Iterator[tuple[int, list[str]]
     try:
         raw = open_regular(path, "csv_bytes")
     except (OSError, ValueError) as error:
-        raise CalibrationError(f"{what} {file}: {getattr(error, 'strerror', None) or error}") from None
+        raise CalibrationError(what, f" {file}: {getattr(error, 'strerror', None) or error}") from None
     cap = LIMITS["csv_bytes"]
     with io.TextIOWrapper(raw, encoding="utf-8") as f:
         line, read = 0, 0
@@ -166,7 +172,7 @@ def _lines(path: str | os.PathLike, what: str) -> Iterator[tuple[int, list[str]]
                 text = f.readline(LINE_CHARS)
             except UnicodeDecodeError as error:
                 raise CalibrationError(
-                    f"{what} {file}: not UTF-8 text ({error.reason}, after line {line})"
+                    what, f" {file}: not UTF-8 text ({error.reason}, after line {line})"
                 ) from None
             if not text:
                 return
@@ -205,7 +211,7 @@ def read_targets(path: str | os.PathLike, joints: Sequence[str]) -> np.ndarray:
     file = os.fspath(path)
     cap = LIMITS["target_rows"]
     values = array("d")
-    with contextlib.closing(_lines(path, "--targets")) as lines:
+    with contextlib.closing(_lines(path, TARGETS)) as lines:
         first, header = _header(lines, file)
         if header[0] != "step":
             raise CalibrationError(f"{file}:{first}: the first column must be 'step'")
@@ -245,7 +251,7 @@ def read_log(path: str | os.PathLike, joints: int, steps: int) -> np.ndarray:
     bound = float(LIMITS["position"])
     values = array("d")
     expected = [*BASE_COLUMNS, *(f"q{j}" for j in range(joints))]
-    with contextlib.closing(_lines(path, "--log")) as lines:
+    with contextlib.closing(_lines(path, LOG)) as lines:
         first, header = _header(lines, file)
         if header != expected:
             q = sum(1 for h in header if h.startswith("q") and h[1:].isdigit())
@@ -330,7 +336,7 @@ def check_bounds(problem: Problem, bounds: dict[str, tuple[float, float]]) -> No
             try:
                 first.simulate({key: value})
             except ValueError as error:
-                raise CalibrationError(f"--fit {key}={low!r}:{high!r}: {error}") from None
+                raise CalibrationError(FIT, f" {key}={low!r}:{high!r}: {error}") from None
             except RuntimeError:
                 pass  # an unstable value is a candidate the fit scores as failed, not bad input
 
@@ -365,11 +371,14 @@ def check_max_evals(max_evals: int, keys: int) -> None:
     fitted keys, and at most :data:`MAX_EVALS`."""
     population = population_size(keys)
     if max_evals > MAX_EVALS:
-        raise CalibrationError(f"--max-evals must be at most {MAX_EVALS:,}, got {short_int(max_evals)}")
+        raise CalibrationError(MAX_EVALS_ARG, f" must be at most {MAX_EVALS:,}, got {short_int(max_evals)}")
     if max_evals < population:
         raise CalibrationError(
-            f"--max-evals {short_int(max_evals)} is less than one generation: fitting {keys} key(s) "
-            f"simulates {population} candidates a generation; give --max-evals {population} or more"
+            MAX_EVALS_ARG,
+            f" {short_int(max_evals)} is less than one generation: fitting {keys} key(s) "
+            f"simulates {population} candidates a generation; give ",
+            MAX_EVALS_ARG,
+            f" {population} or more",
         )
 
 
@@ -489,7 +498,9 @@ def calibrate(
     if not math.isfinite(best_error):
         raise CalibrationError(
             f"no fit: every one of the {failed} candidates' simulations failed (the physics blew up, or "
-            "the error against the log is not finite); check the log, the targets and the --fit bounds"
+            "the error against the log is not finite); check the log, the targets and the ",
+            FIT,
+            " bounds",
         )
     fitted = space.to_values(best_x)
     return {
