@@ -292,10 +292,16 @@ impl SnakeEnv {
     /// An environment with the given configuration; call [`SnakeEnv::reset`] before stepping.
     pub fn new(config: EnvConfig) -> Result<Self> {
         config.validate()?;
+        Ok(Self::from_valid(config))
+    }
+
+    /// [`SnakeEnv::new`] of a configuration that `validate` has accepted already (a vector env checks
+    /// its one configuration once, not once per env).
+    pub(crate) fn from_valid(config: EnvConfig) -> Self {
         let n = config.joints();
         let driver = Driver::new(&config);
         let structure = config.observation_structure();
-        Ok(SnakeEnv {
+        SnakeEnv {
             previous_action: vec![0.0; config.action_dim()],
             driver,
             origin: (0.0, 0.0),
@@ -330,7 +336,7 @@ impl SnakeEnv {
             physics: Physics::default(),
             delay: Vec::new(),
             delay_head: 0,
-        })
+        }
     }
 
     /// Turns the physics trace on or off (off by default). While on, every reset and step records

@@ -173,24 +173,20 @@ impl StepBuffers {
 impl VecSnakeEnv {
     /// `num_envs` (at least 1) envs of `config`, stepped on rayon's global thread pool.
     pub fn new(config: EnvConfig, num_envs: usize) -> Result<Self> {
-        let max = crate::limits::MAX_ENVS;
-        if !(1..=max).contains(&num_envs) {
-            return Err(invalid(format!(
-                "num_envs must be in [1, {max}], got {num_envs}"
-            )));
-        }
+        let max = crate::limits::MAX_ENVS as f64;
+        crate::limits::check_range("num_envs", num_envs as f64, 1.0, max)?;
+        // One configuration, checked once: every env is built from it as it is.
+        config.validate()?;
         let d = config.observation_dim();
         let slots = (0..num_envs)
-            .map(|_| {
-                Ok(Slot {
-                    env: SnakeEnv::new(config.clone())?,
-                    info: None,
-                    final_obs: vec![0.0; d],
-                    finished: false,
-                    error: None,
-                })
+            .map(|_| Slot {
+                env: SnakeEnv::from_valid(config.clone()),
+                info: None,
+                final_obs: vec![0.0; d],
+                finished: false,
+                error: None,
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect();
         Ok(VecSnakeEnv {
             slots,
             config,
