@@ -380,7 +380,7 @@ pub fn from_yaml<T: serde::de::DeserializeOwned>(text: &str, shown: &str, what: 
 }
 
 /// A key for an error message's key path: itself when it is a short name ([`is_name_like`], at most
-/// [`EXCERPT_CHARS`] characters), an [`excerpt`] otherwise.
+/// 24 characters), an [`excerpt`] otherwise.
 pub fn withheld_unless_name(text: &str) -> String {
     if is_name_like(text) && text.chars().count() <= EXCERPT_CHARS {
         text.to_owned()
