@@ -40,9 +40,11 @@ fn episode_dict<'py>(py: Python<'py>, e: &Episode) -> PyResult<Bound<'py, PyDict
 /// `act(obs)` gets the observations of the envs that run at once, float32 of shape (m,
 /// observation_dim), and returns their actions (m, action_dim), float32 or float64; env i is seeded
 /// with seed + i (snake-rl's `evaluate::run_episodes_with`). `restart(i)`, where given, is called
-/// when env i's episode ends (an actor with a clock per env restarts it).
+/// when env i's episode ends (an actor with a clock per env restarts it). `progress(done)`, where
+/// given, is called each time an episode that counts ends, with the number ended so far (1 to
+/// `episodes`); it changes nothing of the episodes.
 #[pyfunction]
-#[pyo3(signature = (config_json, episodes, seed, act, restart=None))]
+#[pyo3(signature = (config_json, episodes, seed, act, restart=None, progress=None))]
 fn run_episodes<'py>(
     py: Python<'py>,
     config_json: &str,
@@ -50,6 +52,7 @@ fn run_episodes<'py>(
     seed: u64,
     act: Bound<'py, PyAny>,
     restart: Option<Bound<'py, PyAny>>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     if !(1..=max_episodes()).contains(&episodes) {
         return Err(PyValueError::new_err(format!(
@@ -90,15 +93,27 @@ fn run_episodes<'py>(
     };
     // Either error ends the evaluation at once: at most one of `failure` and `restart_failure` is set.
     let mut restart_failure: Option<PyErr> = None;
+    // Every episode's end reaches `restart`; those within their env's count are the evaluation's.
+    let targets = evaluate::episode_targets(episodes);
+    let mut ended = vec![0usize; targets.len()];
+    let mut counted = 0usize;
     let mut on_restart = |env: usize| -> Result<(), EvalError> {
-        let Some(restart) = &restart else {
-            return Ok(());
-        };
-        restart.call1((env,)).map(|_| ()).map_err(|e| {
+        let mut fail = |e: PyErr| {
             let message = e.to_string();
             restart_failure = Some(e);
             EvalError::Actor(message)
-        })
+        };
+        if let Some(restart) = &restart {
+            restart.call1((env,)).map_err(&mut fail)?;
+        }
+        if ended[env] < targets[env] {
+            ended[env] += 1;
+            counted += 1;
+            if let Some(progress) = &progress {
+                progress.call1((counted,)).map_err(&mut fail)?;
+            }
+        }
+        Ok(())
     };
     let mut interrupted: Option<PyErr> = None;
     let mut stop = || match py.check_signals() {

@@ -450,6 +450,8 @@ def test_an_output_that_fails_replaces_no_other(logged, tmp_path, capsys):
     out = tmp_path / "out.yaml"
     out.write_text("old\n")
     args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    # --no-progress: the fit's progress lines (stderr, piped) would precede the one-line error.
+    args += ["--no-progress"]
     code = cli.main(["calibrate", *args, "--out", str(out), "--json", "/dev/full", "--max-evals", "8"])
     err = capsys.readouterr().err.strip()
     assert code == 1 and "\n" not in err and "--json /dev/full" in err, err
@@ -642,3 +644,19 @@ def _alive(pid: int) -> bool:
     except (OSError, IndexError):
         return False
     return state != "Z"  # a zombie has ended (its reaper may be slow)
+
+
+def test_piped_progress_is_a_line_per_generation_on_stderr(logged, tmp_path):
+    """Piped: one line per generation of CMA-ES on stderr (none on stdout), `--json -` JSON alone."""
+    args = ["--robot", ROBOT, "--targets", logged / "targets.csv", "--log", logged / "log.csv"]
+    args += ["--fit", "ground_friction=0.2:1.5", "--out", tmp_path / "f.yaml", "--workers", 1]
+    args += ["--max-evals", 12, "--json", "-"]
+    done = subprocess.run(
+        [sys.executable, "-m", "snakesim", "calibrate", *map(str, args)], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    lines = done.stderr.splitlines()
+    assert lines and all(re.match(r"calibrate: \d+/12 simulations, .*best error", line) for line in lines)
+    assert "\r" not in done.stdout + done.stderr
+    assert lines[-1].startswith(f"calibrate: {result['simulations'] - 1}/12 simulations")

@@ -79,3 +79,13 @@ def test_each_env_card_names_every_part_and_states_the_versioning_rule(task):
     for section in ("Observation space", "Action space", "Reward", "Episode end", "Arguments"):
         assert section in doc or section in TASK_ENVS["paper"].__doc__, (cls.__name__, section)
     assert "Version history" in doc and "bumps" in doc and "v0" in doc, cls.__name__
+
+
+def test_a_gymnasium_make_env_gives_it_as_the_docstring_says():
+    """``gymnasium.make``'s wrappers pass on no attribute (Gymnasium 1.x): the documented ways work."""
+
+    env = gymnasium.make("snakesim/SnakeGoal-v0", joints=5)
+    expected = snakesim.SnakeGoalEnv(joints=5).observation_structure
+    assert env.unwrapped.observation_structure == expected
+    assert env.get_wrapper_attr("observation_structure") == expected
+    env.close()

@@ -247,7 +247,8 @@ def control_loop(out):
     """docs/deploy.md's control loop, reading ``out``."""
     page = (REPO / "docs" / "deploy.md").read_text()
     loop = page.split("## A control loop", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
-    return compile(loop.replace('"paper-10.onnx"', repr(str(out))), "deploy.md", "exec")
+    assert '"out/paper-10.onnx"' in loop, "the loop reads the file the page's export writes"
+    return compile(loop.replace('"out/paper-10.onnx"', repr(str(out))), "deploy.md", "exec")
 
 
 def test_the_control_loop_of_docs_deploy_md_runs(tmp_path, capsys, monkeypatch):

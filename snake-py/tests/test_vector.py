@@ -1,5 +1,7 @@
 """The batched env through SB3's VecEnv and Gymnasium's vector API."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import snakesim
@@ -233,3 +235,22 @@ def test_a_closed_env_refuses_step_and_reset(name):
     with pytest.raises(ClosedEnvironmentError, match=message):
         env.reset()
     env.close()
+
+
+def test_the_make_vec_example_of_docs_guide_md_runs(capsys):
+    """docs/guide.md's make_vec example, as written: its infos are what the page says."""
+    import contextlib
+    import io
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "guide.md").read_text()
+    marker = "<!-- make_vec example: snake-py/tests/test_vector.py runs it -->\n```python\n"
+    code = page.split(marker, 1)[1].split("```", 1)[0]
+    printed = io.StringIO()
+    scope: dict = {}
+    with contextlib.redirect_stdout(printed):
+        exec(compile(code, "guide.md", "exec"), scope)
+    assert printed.getvalue().count("\n") >= 1, "no episode ended in the example"
+    envs, infos = scope["envs"], scope["infos"]
+    assert scope["structure"] == envs.observation_structure
+    assert sum(scope["structure"].values()) == scope["obs"].shape[1]
+    assert set(infos) <= {"final_obs", "_final_obs", "final_info", "_final_info"}

@@ -194,6 +194,13 @@ pub fn run_episodes(
     )
 }
 
+/// How many of `episodes` episodes each env of an evaluation runs: `min(episodes, MAX_EVAL_ENVS)`
+/// envs, env `i` running `(episodes + i) / m` (an env's episodes beyond its count end uncounted).
+pub fn episode_targets(episodes: usize) -> Vec<usize> {
+    let m = episodes.min(MAX_EVAL_ENVS);
+    (0..m).map(|i| (episodes + i) / m).collect()
+}
+
 /// The evaluation protocol for any actor: up to [`MAX_EVAL_ENVS`] envs, env `i` seeded with
 /// `seed + i`, env `i` contributing `(episodes + i) / m` episodes, each measured as [`Episode`]
 /// says. `episodes` must be at least 1. The episodes come back in their own order (env 0's in
@@ -210,8 +217,8 @@ pub fn run_episodes_with<A: Copy + Default + Into<f64> + Sync>(
     stop: &mut dyn FnMut() -> bool,
 ) -> Result<Vec<Episode>, EvalError> {
     assert!(episodes >= 1, "an evaluation needs an episode");
-    let m = episodes.min(MAX_EVAL_ENVS);
-    let targets: Vec<usize> = (0..m).map(|i| (episodes + i) / m).collect();
+    let targets = episode_targets(episodes);
+    let m = targets.len();
     let mut counts = vec![0usize; m];
     let n = config.action_dim();
     let mut envs = VecSnakeEnv::new(config.clone(), m)?;

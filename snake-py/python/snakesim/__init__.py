@@ -18,7 +18,11 @@
   what a recording holds.
 
 The package by concern: :mod:`snakesim.envs`, :mod:`snakesim.runs`, :mod:`snakesim.agents`,
-:mod:`snakesim.sweeps`, :mod:`snakesim.viewer`, :mod:`snakesim.cli`.
+:mod:`snakesim.sweeps`, :mod:`snakesim.viewer`, :mod:`snakesim.cli`. Each, and each of their modules,
+is an attribute after ``import snakesim`` alone, imported on first use (``import snakesim`` imports
+none of the optional packages: torch, Ray, onnx, rerun)::
+
+    snakesim.runs.onnx.to_onnx(snakesim.agents.load_agent("models/paper-10.safetensors"))
 """
 
 from __future__ import annotations
@@ -72,6 +76,11 @@ def register_envs() -> None:
             )
 
 
+#: The subpackages and modules reachable as attributes of ``snakesim`` (``snakesim.runs.onnx``), each
+#: imported when first asked for, so that ``import snakesim`` stays quick and needs no extra.
+_SUBMODULES = ("agents", "cli", "envs", "extras", "files", "limits", "runs", "sweeps", "viewer", "wrappers")
+
+
 def __getattr__(name: str):
     # SnakeVecEnv needs stable-baselines3 (the extra snakesim[sb3]): import it only when asked for; without
     # it, asking is an ImportError naming the pip install (snakesim.extras).
@@ -79,7 +88,15 @@ def __getattr__(name: str):
         from snakesim.envs.sb3 import SnakeVecEnv
 
         return SnakeVecEnv
+    if name in _SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f"snakesim.{name}")
     raise AttributeError(f"module 'snakesim' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_SUBMODULES})
 
 
 register_envs()

@@ -46,7 +46,7 @@ class NativeAgent(Agent):
             policy = _core.NativePolicy(os.fspath(model))
         except ValueError as error:
             raise AgentError(str(error)) from None
-        note(policy.notes)
+        note(policy.notes, overrides)
         recorded = {"joints": policy.joints, "preset": policy.preset, **json.loads(policy.env_json())}
         env_kwargs = agreed_env(model, recorded, joints, preset, overrides)
         check_env(model, env_kwargs, policy.obs_dim, policy.act_dim)

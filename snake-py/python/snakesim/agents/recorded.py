@@ -12,9 +12,17 @@ from typing import Any
 from snakesim.agents.protocol import AgentError, Keyword
 
 
-def note(lines: list[str]) -> None:
-    """Tells the user what loading found (a robot file that changed since training), one line each."""
+def note(lines: list[str], overrides: Mapping[str, Any] | None = None) -> None:
+    """Tells the user what loading found (a robot file that changed since training), one line each.
+    Where ``overrides`` replace the robot (world) the note is about (``snakesim evaluate --robot``),
+    it says that the given one runs, not the record."""
     for line in lines:
+        for key in ("robot", "world"):
+            ending = f"; the {key} recorded in the model is used"
+            given = (overrides or {}).get(key)
+            if line.endswith(ending) and isinstance(given, (str, Path)):
+                given_one = f"the {key} file given, {given}, is used, not the recorded one"
+                line = f"{line.removesuffix(ending)}; {given_one}"
         print(f"note: {line}", file=sys.stderr)
 
 

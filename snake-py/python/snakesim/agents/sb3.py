@@ -58,9 +58,9 @@ class SB3Agent(Agent):
         recorded = archive.data.get(EXPORTED_ENV_KEY)
         if located.config is not None:
             recorded = runconfig.env_kwargs(located.config)
-            env_kwargs = agreed_env(model.parent, recorded, joints, preset, overrides)
+            env_kwargs = agreed_env(model.parent, recorded, joints, preset, None)
         elif isinstance(recorded, dict) and ":serialized:" not in recorded:  # by snakesim export
-            env_kwargs = agreed_env(model, dict(recorded), joints, preset, overrides)
+            env_kwargs = agreed_env(model, dict(recorded), joints, preset, None)
         else:
             bare_joints = info.action_dim if joints is None else joints
             env_kwargs = {
@@ -74,8 +74,10 @@ class SB3Agent(Agent):
                 f" {info.action_dim} (or the observation it was trained with)",
             )
         if not hint:
-            # The recorded robot and world files, where the env keywords are known (not guessed).
-            env_kwargs = _recorded_files(model, env_kwargs, archive.data.get(RECORDED_FILES_KEY))
+            # The recorded robot and world files, where the env keywords are known (not guessed); then
+            # the caller's overrides (a robot file given in place of the recorded one runs as given).
+            env_kwargs = _recorded_files(model, env_kwargs, archive.data.get(RECORDED_FILES_KEY), overrides)
+            env_kwargs = {**env_kwargs, **(overrides or {})}
         check_env(model, env_kwargs, info.observation_dim, info.action_dim, hint)
         extras.require("sb3", f"loading the Stable-Baselines3 model {model}")
         policy, arch = sb3_policy(model, archive, device)
@@ -123,7 +125,9 @@ class SB3Agent(Agent):
         return sb3_actor(self.policy, self.normalization())
 
 
-def _recorded_files(model: Path, env_kwargs: dict[str, Any], records: Any) -> dict[str, Any]:
+def _recorded_files(
+    model: Path, env_kwargs: dict[str, Any], records: Any, overrides: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
     """``env_kwargs`` with the robot and world files an SB3 zip records (``snakesim_env_files``) in
     place of those that changed since training, with a note for each (as a native model's). A robot
     or world path without a record is refused: a model's files come from its record, never from a
@@ -138,7 +142,7 @@ def _recorded_files(model: Path, env_kwargs: dict[str, Any], records: Any) -> di
         env_kwargs, notes = apply_env_files(env_kwargs, records)
     except (TypeError, ValueError) as error:
         raise AgentError(f"{model}: {error}") from None
-    note([f"{model}: {line}" for line in notes])
+    note([f"{model}: {line}" for line in notes], overrides)
     return env_kwargs
 
 

@@ -184,3 +184,17 @@ def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLi
         check_writable(path, what, inputs)
     check_distinct(outputs)
     return agent
+
+
+def progress_options(p: argparse.ArgumentParser, step: str) -> None:
+    """``--progress`` and ``--no-progress``, as ``snakesim train``'s: by default a bar on a terminal
+    and one line per step of progress (one of ``step``) when stderr is not one; stdout never."""
+    p.add_argument(
+        "--progress",
+        dest="progress",
+        action="store_true",
+        default=None,
+        help=f"show a progress bar on stderr (default: when stderr is a terminal; otherwise one line per "
+        f"{step} there)",
+    )
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress")

@@ -16,9 +16,11 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from snakesim.cli.args import progress_options
 from snakesim.cli.errors import UserError, check_distinct, check_writable
 from snakesim.files import output_kind
 from snakesim.limits import LIMITS
+from snakesim.runs.progress import Progress
 
 #: The flags that give ``snakesim.runs.calibrate``'s arguments: its errors name the arguments, the
 #: command its flags.
@@ -244,25 +246,20 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                 before = trajectory_error(*problem.simulate({}), problem.log)
             except (ValueError, RuntimeError) as error:
                 raise CalibrationError(f"--robot {args.robot}: {error}") from None
-            quiet = args.json == "-"
-            shown: list[bool] = []
-
-            def progress(simulations: int, best: float) -> None:
-                if not quiet:
-                    shown[:] = [True]
-                    print(f"\r{simulations} simulations, best error {best:.6g}", end="", flush=True)
-
-            result = calibrate(
-                problem,
-                bounds,
-                max_evals=args.max_evals,
-                workers=workers,
-                seed=args.seed,
-                progress=progress,
-                error_before=before,
-            )
-            if shown:
-                print()
+            # On stderr, one step per generation of CMA-ES: the fit's simulations (the robot file's
+            # own, `before`, not counted) of at most --max-evals, and the best error so far.
+            with Progress(args.max_evals, "simulations", "calibrate", args.progress) as shown:
+                result = calibrate(
+                    problem,
+                    bounds,
+                    max_evals=args.max_evals,
+                    workers=workers,
+                    seed=args.seed,
+                    progress=lambda simulations, best: shown.update(
+                        simulations - 1, f"best error {_g(best) if math.isfinite(best) else '-'}"
+                    ),
+                    error_before=before,
+                )
             yaml_text = fitted_robot_yaml(args.robot, result["fitted"], args.out)
         except CalibrationError as error:
             raise UserError(error.naming(CALIBRATE_FLAGS)) from None
@@ -331,4 +328,5 @@ def add_parser(sub) -> None:
         help="most simulations of the fit",
     )
     p.add_argument("--workers", type=_integer, help="processes that simulate (default: the number of cores)")
+    progress_options(p, "generation of simulations")
     p.set_defaults(func=cmd_calibrate)

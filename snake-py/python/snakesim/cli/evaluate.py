@@ -7,14 +7,22 @@ import json
 import sys
 from pathlib import Path
 
-from snakesim.cli.args import agent_options, baseline_env_options, episodes, goal, load_agent
+from snakesim.cli.args import (
+    agent_options,
+    baseline_env_options,
+    episodes,
+    goal,
+    load_agent,
+    progress_options,
+)
 from snakesim.cli.errors import UserError, check_writable
 from snakesim.envs.config import file_label
 from snakesim.files import write_atomically
+from snakesim.runs.progress import Progress
 
 
 def env_line(agent) -> str:
-    """The evaluated env in words: task, body, joints."""
+    """The evaluated env in words: task, body, joints, world."""
     kwargs = agent.env_kwargs
     task = kwargs.get("task")
     terrain = kwargs.get("terrain") or {}
@@ -22,7 +30,14 @@ def env_line(agent) -> str:
         task = "pegs" if terrain.get("pegs") else "rough" if terrain.get("rough") else None
     body = f"robot {file_label(kwargs['robot'])}" if kwargs.get("robot") else f"preset {kwargs['preset']}"
     prefix = "" if task is None else f"task {task}, "
-    return f"{prefix}{agent.joints} joints, {body}"
+    world = f", world {file_label(kwargs['world'])}" if kwargs.get("world") else ""
+    return f"{prefix}{agent.joints} joints, {body}{world}"
+
+
+def env_file(value) -> str | None:
+    """The robot or world file the evaluation ran, for the JSON: its path, or the path of the model's
+    record of it followed by `` (as recorded in the model)``; None for none."""
+    return None if not value else file_label(value)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
@@ -32,17 +47,23 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for path, what in outputs:
         check_writable(path, what)
     agent = load_agent(args, outputs)
-    result = evaluate(agent, args.episodes, args.seed, deterministic=not args.stochastic)
+    with Progress(args.episodes, "episodes", "evaluate", args.progress) as progress:
+        result = evaluate(
+            agent, args.episodes, args.seed, deterministic=not args.stochastic, progress=progress.update
+        )
     report = {
         "model": agent.path,
         "arch": agent.arch,
         "joints": agent.joints,
         "preset": agent.env_kwargs["preset"],
+        "robot": env_file(agent.env_kwargs.get("robot")),
+        "world": env_file(agent.env_kwargs.get("world")),
         "sb3_version": agent.sb3_version,
         "trained_timesteps": agent.num_timesteps,
         "seed": args.seed,
         "deterministic": not args.stochastic,
         "randomize": agent.env_kwargs.get("randomize"),
+        "randomize_file": args.randomize,
         **result,
     }
     text = json.dumps(report, indent=2) + "\n"
@@ -66,6 +87,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     rows = [
         ("model", f"{agent.path} ({label}, {trainer})"),
         ("env", env_line(agent)),
+        *([("randomize", f"{args.randomize} (physics drawn per episode)")] if args.randomize else []),
         (
             "episodes",
             f"{report['episodes']} (seed {args.seed}, {mode})",
@@ -111,4 +133,5 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--json", metavar="FILE", help="also write the results as JSON (- : print only JSON to stdout)"
     )
+    progress_options(p, "episode")
     p.set_defaults(func=cmd_evaluate)

@@ -40,7 +40,14 @@ def cluster_options(p: argparse.ArgumentParser) -> None:
         help="retries of a trial whose worker dies, from its last checkpoint "
         f"(default {sweep.DEFAULT_MAX_FAILURES})",
     )
-    p.add_argument("--progress", dest="progress", action="store_true", default=None, help="show trial counts")
+    p.add_argument(
+        "--progress",
+        dest="progress",
+        action="store_true",
+        default=None,
+        help="show trial counts and the time left on stderr (the default: a bar on a terminal, otherwise "
+        "a line whenever the counts change)",
+    )
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no trial counts")
 
 

@@ -8,3 +8,13 @@ from snakesim.envs.env import SnakeEnv, SnakeGoalEnv, make_env
 from snakesim.envs.vector import SnakeVectorEnv
 
 __all__ = ["SnakeEnv", "SnakeGoalEnv", "SnakeVectorEnv", "make_env"]
+
+
+def __getattr__(name: str):
+    # Its modules on first use (``snakesim.envs.render`` after ``import snakesim``), none at import.
+    import importlib
+    import pkgutil
+
+    if name in {module.name for module in pkgutil.iter_modules(__path__)}:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

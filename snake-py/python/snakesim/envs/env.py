@@ -58,7 +58,10 @@ class SnakeEnv(gymnasium.Env):
     to float32. ``env.observation_structure`` names its parts in order, name -> size, summing to D
     (Gymnasium's convention, as Swimmer-v5's; built from the one description in snake-core,
     ``ObservationLayout::structure``); ``snakesim.envs.config.observation_slice(structure, name)``
-    gives a part's indices. The parts, in order, of a snake of N joints (a robot: its movable joints):
+    gives a part's indices. On a ``gymnasium.make`` env, whose wrappers pass on no attribute in
+    Gymnasium 1.x, it is ``env.unwrapped.observation_structure`` (or
+    ``env.get_wrapper_attr("observation_structure")``). The parts, in order, of a snake of N joints
+    (a robot: its movable joints):
 
     =================  ======  =====================================================================
     name               size    meaning

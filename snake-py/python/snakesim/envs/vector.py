@@ -35,7 +35,11 @@ class SnakeVectorEnv(VectorEnv):
     of another length is a ``ValueError``). ``close()`` releases the worlds; ``reset`` and ``step``
     then raise ``gymnasium.error.ClosedEnvironmentError``. With ``randomize``, ``infos["physics"]``
     (masked by ``infos["_physics"]``) holds what each episode that began drew: every env's at
-    ``reset``, the reset ones' in ``step``.
+    ``reset``, the reset ones' in ``step``. Unlike ``SyncVectorEnv``, which batches every env's
+    ``info`` at every step, ``step``'s infos hold only these keys, for the envs whose episode ended
+    (a step in which none ended gives ``{}``); a running episode's per-step ``info`` comes from
+    :class:`snakesim.SnakeEnv` (``gymnasium.make``, or ``gymnasium.make_vec(...,
+    vectorization_mode="sync")``).
 
     Keyword arguments are those of :class:`snakesim.SnakeEnv` (without ``render_mode``).
     """

@@ -1,5 +1,5 @@
 """The Ray side of sweeps and searches: connecting to a cluster, the Tune trainable that trains one
-trial in its run directory, and the one-line progress display.
+trial in its run directory, and the progress display.
 
 A trial reports every periodic evaluation of its run to Tune as it is written (``timesteps``,
 ``mean_return``, ``success_rate``, ...). Its checkpoints are the run's own: with a report after a new
@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from snakesim import extras
+from snakesim.runs.progress import Progress, clock
 from snakesim.sweeps.plan import (
     CONNECT_TIMEOUT_S,
     TRIAL_LOCK_WAIT_S,
@@ -338,8 +339,9 @@ def train_trial(param: Mapping[str, Any]) -> None:
 
 # -- the driver -----------------------------------------------------------------------------------
 class _Display:
-    """Trials running / done / failed, on one line rewritten in place on a terminal, else a line
-    whenever the counts change."""
+    """Trials running / done / failed of the total, on stderr: on a terminal a bar of finished trials
+    with the elapsed time and an estimate of the time left (tqdm), the counts and the latest result
+    beside it; otherwise a line whenever the counts change, with the elapsed time and the estimate."""
 
     def __init__(self, total: int, show: bool, tty: bool) -> None:
         self.total = total
@@ -349,6 +351,10 @@ class _Display:
         self.retries = 0
         self.latest = ""
         self.last_line = ""
+        self.start = time.monotonic()
+        self.bar: Progress | None = None
+        if show and tty:
+            self.bar = Progress(total, "trials", "sweep", show=True)
 
     def set(self, name: str, state: str) -> None:
         self.state[name] = state
@@ -362,8 +368,11 @@ class _Display:
         if self.tty:
             self.draw()
 
+    def counts(self) -> dict[str, int]:
+        return {s: sum(1 for v in self.state.values() if v == s) for s in ("running", "done", "failed")}
+
     def line(self) -> str:
-        counts = {s: sum(1 for v in self.state.values() if v == s) for s in ("running", "done", "failed")}
+        counts = self.counts()
         waiting = self.total - sum(counts.values())
         text = (
             f"trials: {counts['running']} running, {counts['done']} done, {counts['failed']} failed, "
@@ -373,22 +382,31 @@ class _Display:
             text += f", {self.retries} retried"
         return text
 
+    def timing(self) -> str:
+        """``M:SS elapsed, about M:SS left``: the time left from the finished trials' pace."""
+        counts = self.counts()
+        finished = counts["done"] + counts["failed"]
+        elapsed = time.monotonic() - self.start
+        text = f"{clock(elapsed)} elapsed"
+        if 0 < finished < self.total:
+            text += f", about {clock(elapsed * (self.total - finished) / finished)} left"
+        return text
+
     def draw(self) -> None:
         if not self.show:
             return
         text = self.line()
-        if self.tty:
-            width = shutil.get_terminal_size().columns - 1
-            sys.stderr.write("\r\x1b[K" + (text + self.latest)[:width])
-            sys.stderr.flush()
+        if self.bar is not None:
+            counts = self.counts()
+            self.bar.update(counts["done"] + counts["failed"], (text + self.latest).removeprefix("trials: "))
         elif text != self.last_line:
-            print(text, file=sys.stderr, flush=True)
+            print(f"{text}, {self.timing()}", file=sys.stderr, flush=True)
         self.last_line = text
 
     def close(self) -> None:
-        if self.show and self.tty:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
 
 
 def _tune_callback(display: _Display, names: Callable[[Any], str]):
@@ -489,8 +507,8 @@ def fit(
     error of each failed trial and whether Ctrl-C stopped it."""
     from ray import tune
 
-    show = sys.stderr.isatty() if progress is None else progress
-    display = _Display(total, show, sys.stderr.isatty())
+    # By default: a bar on a terminal, else a line whenever the counts change (--no-progress: none).
+    display = _Display(total, progress is not False, sys.stderr.isatty())
     storage = (out / TUNE_DIR).resolve()
     storage.mkdir(parents=True, exist_ok=True)
     tune_config = tune_config or tune.TuneConfig()
