@@ -557,9 +557,12 @@ def test_targets_over_the_row_limit_are_refused_while_read(tmp_path):
     targets, _ = _write_run(tmp_path, 1)
     with open(targets, "a") as f:
         f.writelines(f"{k},0.3,-0.3,0.3,-0.3,0.3\n" for k in range(2, rows + 2))
+    # VmHWM, the child's own peak: Linux carries ru_maxrss across exec, so the child of a test process
+    # that has grown large (xdist runs many files in one) would report its parent's peak.
     probe = (
-        "import resource, sys; from snakesim.cli.app import main; code = main(sys.argv[1:]); "
-        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss); sys.exit(code)"
+        "import sys; from snakesim.cli.app import main; code = main(sys.argv[1:]); "
+        "print(next(l for l in open('/proc/self/status') if l.startswith('VmHWM')).split()[1]); "
+        "sys.exit(code)"
     )
     args = ["calibrate", "--robot", str(SMALL), "--targets", str(targets), "--log", str(targets)]
     args += ["--fit", "motors.kp=0.1:1", "--out", str(tmp_path / "out.yaml")]

@@ -577,9 +577,12 @@ def bounded_child(code: str, *args, timeout=120) -> subprocess.CompletedProcess:
         "torch.set_num_threads(1)\n"
         "size = int(open('/proc/self/statm').read().split()[0]) * resource.getpagesize()\n"
         "resource.setrlimit(resource.RLIMIT_AS, (size + (2 << 30), resource.RLIM_INFINITY))\n"
-        "before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+        # VmHWM, not ru_maxrss: Linux carries ru_maxrss across exec, so a child of a large test process
+        # would start at its parent's peak and hide its own growth.
+        "hwm = lambda: int(next(l for l in open('/proc/self/status') if l.startswith('VmHWM')).split()[1])\n"
+        "before = hwm()\n"
     )
-    epilogue = "\nprint((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) // 1024)\n"
+    epilogue = "\nprint((hwm() - before) // 1024)\n"
     env = {**os.environ, "OMP_NUM_THREADS": "1", "MALLOC_ARENA_MAX": "2"}
     return subprocess.run(
         [sys.executable, "-c", prologue + code + epilogue, *map(str, args)],
