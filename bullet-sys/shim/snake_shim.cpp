@@ -228,6 +228,19 @@ void set_position_motor(btMultiBody* body, int joint, btScalar dt, double target
 
 }  // namespace
 
+namespace {
+// After a state is set: the link frames and the colliders follow, as pybullet's processInitPoseCommand
+// ends (forwardKinematics, then updateCollisionObjectWorldTransforms).
+void refresh_transforms(btMultiBody* mb) {
+    btAlignedObjectArray<btQuaternion> scratch_q;
+    btAlignedObjectArray<btVector3> scratch_m;
+    mb->forwardKinematics(scratch_q, scratch_m);
+    scratch_q.resize(mb->getNumLinks() + 1);
+    scratch_m.resize(mb->getNumLinks() + 1);
+    mb->updateCollisionObjectWorldTransforms(scratch_q, scratch_m);
+}
+}  // namespace
+
 #define SS_GUARD_BEGIN try {
 #define SS_GUARD_END                                                              \
     }                                                                             \
@@ -812,6 +825,118 @@ int ss_get_contacts(const ss_world* w, int body, ss_contact* out, int capacity, 
         }
     }
     *count_out = count;
+    return SS_OK;
+    SS_GUARD_END
+}
+
+
+int ss_get_link_velocities(const ss_world* w, int body, int count, double* velocities) {
+    if (!w || (count > 0 && !velocities)) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (count < 0 || count > mb->getNumLinks()) return fail(SS_ERR_LINK, "more links asked for than the body has");
+    SS_GUARD_BEGIN
+    // PSCP's getLinkState with computeLinkVelocity (PSCP 7991, 8093): tree velocities in each link's
+    // frame (compTreeLinkVelocities), turned to the world by the link's cached world transform.
+    btAlignedObjectArray<btVector3> omega, vel;
+    omega.resize(mb->getNumLinks() + 1);
+    vel.resize(mb->getNumLinks() + 1);
+    mb->compTreeLinkVelocities(&omega[0], &vel[0]);
+    for (int l = 0; l < count; ++l) {
+        const btMatrix3x3& rot = mb->getLink(l).m_cachedWorldTransform.getBasis();
+        btVector3 v = rot * vel[l + 1];
+        btVector3 o = rot * omega[l + 1];
+        for (int k = 0; k < 3; ++k) {
+            velocities[6 * l + k] = v[k];
+            velocities[6 * l + 3 + k] = o[k];
+        }
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_apply_external_force(ss_world* w, int body, int link, const double force[3], const double position[3]) {
+    if (!w || !force || !position) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    if (!finite3(force) || !finite3(position)) return fail(SS_ERR_ARGUMENT, "force and position must be finite");
+    SS_GUARD_BEGIN
+    // PSCP processApplyExternalForceCommand, WORLD_FRAME: the force at the link's frame origin (its centre
+    // of mass) plus the torque of its arm.
+    btVector3 f(force[0], force[1], force[2]);
+    btVector3 p(position[0], position[1], position[2]);
+    if (link == -1) {
+        btVector3 arm = p - mb->getBaseWorldTransform().getOrigin();
+        mb->addBaseForce(f);
+        mb->addBaseTorque(arm.cross(f));
+    } else {
+        btVector3 arm = p - mb->getLink(link).m_cachedWorldTransform.getOrigin();
+        mb->addLinkForce(link, f);
+        mb->addLinkTorque(link, arm.cross(f));
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_apply_external_torque(ss_world* w, int body, int link, const double torque[3]) {
+    if (!w || !torque) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (link < -1 || link >= mb->getNumLinks()) return fail(SS_ERR_LINK, "no such link");
+    if (!finite3(torque)) return fail(SS_ERR_ARGUMENT, "torque must be finite");
+    SS_GUARD_BEGIN
+    btVector3 t(torque[0], torque[1], torque[2]);
+    if (link == -1) {
+        mb->addBaseTorque(t);
+    } else {
+        mb->addLinkTorque(link, t);
+    }
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_reset_base_state(ss_world* w, int body, const ss_base_state* s) {
+    if (!w || !s) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (!finite3(s->position) || !finite3(s->linear_velocity) || !finite3(s->angular_velocity) ||
+        !std::isfinite(s->orientation[0]) || !std::isfinite(s->orientation[1]) ||
+        !std::isfinite(s->orientation[2]) || !std::isfinite(s->orientation[3]))
+        return fail(SS_ERR_ARGUMENT, "base state must be finite");
+    btQuaternion q(s->orientation[0], s->orientation[1], s->orientation[2], s->orientation[3]);
+    if (q.length2() < 1e-12) return fail(SS_ERR_ARGUMENT, "base orientation must be a non-zero quaternion");
+    SS_GUARD_BEGIN
+    // PSCP processInitPoseCommand: position, then the inverse of the rotation as given (pybullet does not
+    // normalise it), then the velocities (resetBaseVelocity after resetBasePositionAndOrientation).
+    mb->setBasePos(btVector3(s->position[0], s->position[1], s->position[2]));
+    mb->setWorldToBaseRot(q.inverse());
+    mb->setBaseVel(btVector3(s->linear_velocity[0], s->linear_velocity[1], s->linear_velocity[2]));
+    mb->setBaseOmega(btVector3(s->angular_velocity[0], s->angular_velocity[1], s->angular_velocity[2]));
+    refresh_transforms(mb);
+    return SS_OK;
+    SS_GUARD_END
+}
+
+int ss_reset_joint_states(ss_world* w, int body, int count, const double* positions, const double* velocities) {
+    if (!w || (count > 0 && (!positions || !velocities))) return fail(SS_ERR_NULL, "null argument");
+    btMultiBody* mb = w->body(body);
+    if (!mb) return fail(SS_ERR_BODY, "no such body");
+    if (count < 0 || count > mb->getNumLinks()) return fail(SS_ERR_LINK, "more joints given than the body has");
+    for (int j = 0; j < count; ++j) {
+        if (!std::isfinite(positions[j]) || !std::isfinite(velocities[j]))
+            return fail(SS_ERR_ARGUMENT, "joint positions and velocities must be finite");
+    }
+    SS_GUARD_BEGIN
+    for (int j = 0; j < count; ++j) {
+        // Fixed joints have no degree of freedom: pybullet skips them too.
+        if (mb->getLink(j).m_dofCount != 1) continue;
+        btScalar q = positions[j];
+        btScalar qd = velocities[j];
+        mb->setJointPosMultiDof(j, &q);
+        mb->setJointVelMultiDof(j, &qd);
+    }
+    refresh_transforms(mb);
     return SS_OK;
     SS_GUARD_END
 }

@@ -265,6 +265,19 @@ int ss_get_link_poses(const ss_world* world, int body, int count, double* poses)
  * each (x, y, z, qx, qy, qz, qw), in the order of the URDF's <collision> elements; *count_out is their
  * number (one identity pose when the importer used the single shape directly). */
 int ss_get_shape_poses(const ss_world* world, int body, int link, double* poses, int capacity, int* count_out);
+/* World-frame velocities of each link's centre of mass, 6 values (vx, vy, vz, wx, wy, wz) per link
+ * 0..count-1, as getLinkState(computeLinkVelocity=1) computes them (compTreeLinkVelocities). */
+int ss_get_link_velocities(const ss_world* world, int body, int count, double* velocities);
+/* applyExternalForce(body, link, force, position, WORLD_FRAME): `force` (N) at the world point
+ * `position`, on link `link` (-1: the base); it acts during the next ss_world_step only. */
+int ss_apply_external_force(ss_world* world, int body, int link, const double force[3], const double position[3]);
+/* applyExternalTorque(body, link, torque, WORLD_FRAME), for the next step only. */
+int ss_apply_external_torque(ss_world* world, int body, int link, const double torque[3]);
+/* resetBasePositionAndOrientation and resetBaseVelocity together: the base's centre of mass pose and its
+ * world-frame velocities; the links follow (forward kinematics, collider transforms). */
+int ss_reset_base_state(ss_world* world, int body, const ss_base_state* state);
+/* resetJointState(body, j, positions[j], velocities[j]) for joints 0..count-1. */
+int ss_reset_joint_states(ss_world* world, int body, int count, const double* positions, const double* velocities);
 /* Contact points of the last step that involve `body`, up to `capacity`; *count_out is the total. */
 int ss_get_contacts(const ss_world* world, int body, ss_contact* out, int capacity, int* count_out);
 

@@ -85,6 +85,6 @@ pub use urdf::{InertiaSource, UrdfRobot};
 pub use vec_env::{FinalStep, FinalSteps, StepBuffers, VecSnakeEnv};
 pub use world::{
     BaseState, BodyId, BoxChain, BoxLink, Contact, Dynamics, DynamicsInfo, JointControl,
-    JointState, Pose, StaticShape, World,
+    JointState, LinkVelocity, Pose, StaticShape, World,
 };
 pub use world_file::{WorldRef, WorldSpec};

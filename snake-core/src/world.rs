@@ -61,6 +61,15 @@ pub struct JointState {
     pub motor_torque: f64,
 }
 
+/// Velocities of a link's centre of mass, world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkVelocity {
+    /// m/s.
+    pub linear: Vector3<f64>,
+    /// rad/s.
+    pub angular: Vector3<f64>,
+}
+
 /// One contact point of a body, from the last step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Contact {
@@ -1035,6 +1044,103 @@ impl World {
             )
         })?;
         Ok(poses_from_shim(&raw))
+    }
+
+    /// World-frame velocities of each link's centre of mass (pybullet's `getLinkState` with
+    /// `computeLinkVelocity=1`): linear in m/s, angular in rad/s, for links 0..n.
+    pub fn link_velocities(&self, body: BodyId) -> Result<Vec<LinkVelocity>> {
+        let n = self.joint_count(body)?;
+        let mut raw = vec![0.0; 6 * n];
+        // SAFETY: live world; raw holds 6 * n writable f64.
+        check(unsafe {
+            bullet_sys::ss_get_link_velocities(self.ptr(), body.0, n as i32, raw.as_mut_ptr())
+        })?;
+        Ok(raw
+            .chunks_exact(6)
+            .map(|v| LinkVelocity {
+                linear: Vector3::new(v[0], v[1], v[2]),
+                angular: Vector3::new(v[3], v[4], v[5]),
+            })
+            .collect())
+    }
+
+    /// `applyExternalForce(..., flags=WORLD_FRAME)`: `force` (N) at the world point `position`, on a link
+    /// (`None`: the base), acting during the next [`World::step`] only.
+    pub fn apply_external_force(
+        &mut self,
+        body: BodyId,
+        link: Option<usize>,
+        force: Vector3<f64>,
+        position: Vector3<f64>,
+    ) -> Result<()> {
+        let link = self.link_index(body, link)?;
+        finite(force.as_slice(), "external force")?;
+        finite(position.as_slice(), "external force position")?;
+        let (f, p): ([f64; 3], [f64; 3]) = (force.into(), position.into());
+        // SAFETY: live world; f and p are 3 readable f64 each.
+        check(unsafe {
+            bullet_sys::ss_apply_external_force(self.ptr(), body.0, link, f.as_ptr(), p.as_ptr())
+        })
+    }
+
+    /// `applyExternalTorque(..., flags=WORLD_FRAME)` on a link (`None`: the base), for the next step only.
+    pub fn apply_external_torque(
+        &mut self,
+        body: BodyId,
+        link: Option<usize>,
+        torque: Vector3<f64>,
+    ) -> Result<()> {
+        let link = self.link_index(body, link)?;
+        finite(torque.as_slice(), "external torque")?;
+        let t: [f64; 3] = torque.into();
+        // SAFETY: live world; t is 3 readable f64.
+        check(unsafe { bullet_sys::ss_apply_external_torque(self.ptr(), body.0, link, t.as_ptr()) })
+    }
+
+    /// `resetBasePositionAndOrientation` and `resetBaseVelocity` in one: the base's centre of mass pose
+    /// and world-frame velocities; the links follow.
+    pub fn reset_base_state(&mut self, body: BodyId, state: &BaseState) -> Result<()> {
+        self.joint_count(body)?;
+        let q = state.pose.orientation.quaternion();
+        let raw = bullet_sys::ss_base_state {
+            position: state.pose.position.into(),
+            orientation: [q.i, q.j, q.k, q.w],
+            linear_velocity: state.linear_velocity.into(),
+            angular_velocity: state.angular_velocity.into(),
+        };
+        // SAFETY: live world; raw is a valid struct.
+        check(unsafe { bullet_sys::ss_reset_base_state(self.ptr(), body.0, &raw) })
+    }
+
+    /// `resetJointState(body, j, positions[j], velocities[j])` for joints 0..n; both slices must be as
+    /// long as the body has joints.
+    pub fn reset_joint_states(
+        &mut self,
+        body: BodyId,
+        positions: &[f64],
+        velocities: &[f64],
+    ) -> Result<()> {
+        let n = self.joint_count(body)?;
+        if positions.len() != n || velocities.len() != n {
+            return Err(invalid(format!(
+                "body {} has {n} joints: got {} positions and {} velocities",
+                body.0,
+                positions.len(),
+                velocities.len()
+            )));
+        }
+        finite(positions, "joint positions")?;
+        finite(velocities, "joint velocities")?;
+        // SAFETY: live world; both slices hold n readable f64.
+        check(unsafe {
+            bullet_sys::ss_reset_joint_states(
+                self.ptr(),
+                body.0,
+                n as i32,
+                positions.as_ptr(),
+                velocities.as_ptr(),
+            )
+        })
     }
 
     /// Contact points of the last step that involve `body`.
