@@ -186,7 +186,8 @@ def test_the_graph_s_interface_and_metadata(tmp_path, capsys):
     meta = graph.get_modelmeta().custom_metadata_map
     env = make_env(joints=10, preset="snakebot-gym")
     assert json.loads(meta["snakesim.observation_structure"]) == env.observation_structure
-    assert json.loads(meta["snakesim.action"])["mode"] == "joints"
+    # The joints mode passes its actions through no wave: the file lists no gait ranges.
+    assert json.loads(meta["snakesim.action"]) == {"mode": "joints"}
     assert json.loads(meta["snakesim.action_scale"]) == 1.0
     assert json.loads(meta["snakesim.normalization"]) == {"epsilon": 1e-8, "clip": 10.0}
     # A batch of one, and an empty batch: the batch is dynamic.
@@ -195,6 +196,17 @@ def test_the_graph_s_interface_and_metadata(tmp_path, capsys):
     (one,) = graph.run(None, {"observation": obs})
     np.testing.assert_allclose(one, agent.act(obs), atol=TOLERANCE, rtol=0)
     assert graph.run(None, {"observation": np.zeros((0, 22), np.float32)})[0].shape == (0, 10)
+
+
+def test_a_gait_mode_model_lists_the_ranges_its_wave_reads(tmp_path, capsys):
+    out = export(capsys, MODELS / "goal-10.safetensors", tmp_path / "goal-10.onnx")
+    meta = session(out).get_modelmeta().custom_metadata_map
+    # The env's own action table (snake-core's ActionConfig defaults for the goal task).
+    action = make_env(task="goal", joints=10).config["action"]
+    assert action["mode"] == "gait"
+    assert json.loads(meta["snakesim.action"]) == {
+        "mode": "gait", "steering": action["steering"], "amplitude": action["amplitude"],
+        "frequency": action["frequency"]}
 
 
 def test_exporting_a_native_model_imports_no_torch(tmp_path):

@@ -314,6 +314,17 @@ def build_model(actor: Actor, metadata: Mapping[str, str] | None = None, doc: st
     return model
 
 
+#: The keys of the env's `action` table that each action mode reads: a joints-mode model's file lists no
+#: gait ranges, which its actions never pass through.
+ACTION_KEYS = {"joints": (), "gait": ("steering", "amplitude", "frequency"), "residual": ("residual_scale",)}
+
+
+def action_metadata(action: dict[str, Any]) -> dict[str, Any]:
+    """The action mode and the ranges that mode uses (`snakesim.action`)."""
+    mode = action["mode"]
+    return {"mode": mode, **{key: action[key] for key in ACTION_KEYS[mode]}}
+
+
 def metadata_of(agent: Any, actor: Actor) -> dict[str, str]:
     """What a control loop needs besides the graph: the observation's parts in order (the env's
     ``observation_structure``), the action mode and scale, the control period, the env keywords, the
@@ -324,7 +335,7 @@ def metadata_of(agent: Any, actor: Actor) -> dict[str, str]:
     norm = actor.normalization
     return {
         METADATA_PREFIX + "observation_structure": json.dumps(env.observation_structure),
-        METADATA_PREFIX + "action": json.dumps(env.config["action"]),
+        METADATA_PREFIX + "action": json.dumps(action_metadata(env.config["action"])),
         METADATA_PREFIX + "action_scale": json.dumps(env.config["action_scale"]),
         # One action every this many physics steps (of 1/240 s): the control period.
         METADATA_PREFIX + "physics_steps_per_env_step": json.dumps(env.config["physics_steps_per_env_step"]),
