@@ -46,6 +46,7 @@ pub mod gait;
 pub mod keys;
 pub mod limits;
 pub mod math;
+pub mod media;
 pub mod recorded;
 pub mod robot;
 pub mod run_targets;
