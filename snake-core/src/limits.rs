@@ -143,6 +143,16 @@ pub const MAX_WORLD_FRICTION: f64 = 1.0e3;
 /// coefficient would act as 10 anyway (on the default plane, friction 0.5, a coefficient of 10 acts as 5).
 pub const MAX_SKIN_FRICTION: f64 = 10.0;
 
+/// Largest density of a fluid medium, kg/m^3 (mercury is 13,534; anything denser is a typo).
+pub const MAX_FLUID_DENSITY: f64 = 2.0e4;
+
+/// Largest speed of a water current along any axis, m/s (the fastest tidal races run at about 7).
+pub const MAX_CURRENT: f64 = 100.0;
+
+/// Largest hydrodynamic coefficient (C_f, C_D, C_A, C_M, the linear weight); published values for
+/// cylinders are 0.01 to about 2.
+pub const MAX_HYDRO_COEFFICIENT: f64 = 1.0e3;
+
 /// Largest maximum velocity of a robot's motors (a robot file's `max_velocity`), rad/s (m/s for a
 /// prismatic joint). The limit clamps the motor's target velocity, so it matters only below the speeds
 /// a joint reaches: at 1e4 rad/s a joint would turn 42 rad (almost 7 turns) in one 1/240 s step, ten
@@ -393,6 +403,9 @@ pub const ALL: &[(&str, LimitValue)] = {
         ("slope_degrees", Float(MAX_SLOPE_DEGREES)),
         ("world_friction", Float(MAX_WORLD_FRICTION)),
         ("skin_friction", Float(MAX_SKIN_FRICTION)),
+        ("fluid_density", Float(MAX_FLUID_DENSITY)),
+        ("current", Float(MAX_CURRENT)),
+        ("hydro_coefficient", Float(MAX_HYDRO_COEFFICIENT)),
         ("motor_velocity", Float(MAX_MOTOR_VELOCITY)),
         ("fit_value", Float(MAX_FIT_VALUE)),
         ("calibration_evals", Int(MAX_CALIBRATION_EVALS)),

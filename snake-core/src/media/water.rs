@@ -1,13 +1,145 @@
-//! Water (issue 60): Kelasidi et al.'s hydrodynamic model of a swimming snake robot, link by link.
+//! Water (issue 60): Kelasidi et al.'s hydrodynamic model of a swimming snake robot, link by link,
+//! extended from the plane to 3D, with buoyancy from each link's submerged volume.
 //!
-//! Skeleton: the entry's keys and the law are being written (see the issue).
+//! The model (E. Kelasidi, K. Y. Pettersen, J. T. Gravdahl, P. Liljebäck, "Modeling of underwater snake
+//! robots", ICRA 2014; restated in Kelasidi et al., "Innovation in underwater robots: biologically
+//! inspired swimming snake robots", IEEE Robotics & Automation Magazine, March 2016, eqs. 5-9): each
+//! link is a slender cylinder of length `2 l` and cross-section semi-axes `a`, `b`. Relative to the
+//! current, with `v_t` the velocity along the link and `v_n` across it,
+//!
+//! - drag along the link `f_t = -c_t v_t - c_t sgn(v_t) v_t^2`, across it `f_n = -c_n v_n - c_n
+//!   sgn(v_n) v_n^2` (linear and nonlinear drag, eqs. 7-8: the same coefficient for both terms, the
+//!   linear one taken per 1 m/s),
+//! - added mass across the link `f_A = -mu_n dv_n/dt` (eq. 6; the current is constant here, so the
+//!   relative acceleration is the link's own),
+//! - fluid moments `tau = -lambda_1 dw/dt - lambda_2 w - lambda_3 w |w|` about the axis normal to the
+//!   link,
+//!
+//! with the Morison-type relations for an elliptic cylinder (ICRA 2014, after Fossen and Morison):
+//! `c_t = 1/2 rho pi C_f (a + b) 2 l`, `c_n = 1/2 rho C_D 2a 2l`, `mu_n = rho pi C_A a^2 2l`,
+//! `lambda_1 = 1/12 rho pi C_M (a^2 - b^2)^2 l^3`, `lambda_2 = 1/6 rho pi C_f (a + b) l^3`,
+//! `lambda_3 = 1/8 rho pi C_f (a + b) l^4`.
+//!
+//! **From the plane to 3D.** Kelasidi's links swim in a plane, so "across" is one direction. Here the
+//! cross-section has two axes (`e2`, `e3`) and each gets the planar law on its own: the relative velocity
+//! across the link is resolved on both, with `c_n`, `mu_n` of that axis (the projected width is the
+//! extent along the *other* cross axis: a flat link moving broadside meets more water), and the fluid
+//! moment about each cross axis uses that axis's `lambda`s. Nonlinear drag is taken component-wise, as
+//! the paper writes it. Spin about the link's own axis, which the planar model cannot have, gets the
+//! skin-friction torque of a rotating cylinder, `tau = -rho pi C_f r^4 (2l) w |w|` (shear `1/2 rho C_f
+//! (w r)^2` on the wetted side). This is strip theory for a slender body as in Morison's equation:
+//! no wake, no vortex shedding, no free-surface waves, no interaction between links.
+//!
+//! **Buoyancy** is `rho g V` upward at the centre of the submerged volume, computed from the link's
+//! collision primitives: a sphere exactly (a spherical cap), a box and a cylinder as slices whose
+//! submerged fraction is linear in their depth (exact for a box with vertical or horizontal faces,
+//! within a few per cent for a tilted or horizontal cylinder), a capsule as its cylinder and two
+//! half spheres. A link partly out of the water gets drag and added mass scaled by its submerged
+//! fraction.
+//!
+//! **Added mass, explicitly.** Bullet integrates applied forces explicitly, so `-mu_n a` from the
+//! previous step's acceleration feeds back with gain `mu_n / m` and oscillates without bound when the
+//! added mass reaches the link's mass (a neutrally buoyant cylinder with `C_A = 1` has `mu_n = m`).
+//! The acceleration is therefore relaxed: `a_f <- a_f + k (a - a_f)` with `k = 1 / (1 + mu_n / m)`,
+//! which makes the loop's gain `1 - k (1 + mu_n / m) = 0`: under a steady force the link reaches
+//! `F / (m + mu_n)`, the implicit answer, one step late (see docs/media.md for the study that shows
+//! the steady swimming speed does not depend on it).
 
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::error::Result;
+use crate::error::{invalid, Result};
 use crate::media::{Region, RegionFile};
 
+/// Fresh water at 20 degrees C, kg/m^3.
+pub const WATER_DENSITY: f64 = 998.2;
+
+/// Kelasidi et al.'s coefficients (ICRA 2014 and RAM 2016: C_f 0.03, C_D 2, C_A 1, C_M 1).
+pub const DEFAULT_COEFFICIENTS: Coefficients = Coefficients {
+    skin_friction: 0.03,
+    drag: 2.0,
+    added_mass: 1.0,
+    added_inertia: 1.0,
+    linear: 1.0,
+};
+
+/// The hydrodynamic coefficients of a link (dimensionless, but `linear`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Coefficients {
+    /// `C_f`: skin friction (drag along the link, fluid moments).
+    pub skin_friction: f64,
+    /// `C_D`: drag across the link.
+    pub drag: f64,
+    /// `C_A`: added mass across the link.
+    pub added_mass: f64,
+    /// `C_M`: added moment of inertia (zero effect on a circular cross-section).
+    pub added_inertia: f64,
+    /// Weight of the linear drag term, s/m: Kelasidi's model uses the quadratic term's coefficient
+    /// per 1 m/s (1); 0 leaves the quadratic law alone.
+    pub linear: f64,
+}
+
+impl Default for Coefficients {
+    fn default() -> Self {
+        DEFAULT_COEFFICIENTS
+    }
+}
+
+/// Coefficients as a robot file or a world file gives them: any subset, over the ones below them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoefficientsFile {
+    /// See [`Coefficients::skin_friction`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin_friction: Option<f64>,
+    /// See [`Coefficients::drag`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drag: Option<f64>,
+    /// See [`Coefficients::added_mass`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_mass: Option<f64>,
+    /// See [`Coefficients::added_inertia`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_inertia: Option<f64>,
+    /// See [`Coefficients::linear`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linear: Option<f64>,
+}
+
+impl CoefficientsFile {
+    /// These values over `base`, each checked: finite, >= 0 and at most
+    /// [`crate::limits::MAX_HYDRO_COEFFICIENT`]; `what` names the key in messages.
+    pub fn over(&self, base: Coefficients, what: &str) -> Result<Coefficients> {
+        let mut c = base;
+        for (name, value, slot) in [
+            ("skin_friction", self.skin_friction, &mut c.skin_friction),
+            ("drag", self.drag, &mut c.drag),
+            ("added_mass", self.added_mass, &mut c.added_mass),
+            ("added_inertia", self.added_inertia, &mut c.added_inertia),
+            ("linear", self.linear, &mut c.linear),
+        ] {
+            if let Some(v) = value {
+                let high = crate::limits::MAX_HYDRO_COEFFICIENT;
+                if !(v.is_finite() && (0.0..=high).contains(&v)) {
+                    return Err(invalid(format!(
+                        "{what}: {name}: must be a finite number in [0, {high}], got {v}"
+                    )));
+                }
+                *slot = v;
+            }
+        }
+        Ok(c)
+    }
+}
+
 /// A `{medium: water, ...}` entry as written.
+///
+/// ```yaml
+/// media:
+///   - {medium: water, area: [-5, -5, 5, 5], surface: 0.5, depth: 1.0,
+///      density: 998.2, current: [0.1, 0, 0], coefficients: {drag: 2.0, added_mass: 1.0}}
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WaterFile {
@@ -18,6 +150,16 @@ pub struct WaterFile {
     pub surface: f64,
     /// How far below the surface it reaches, metres.
     pub depth: f64,
+    /// Density, kg/m^3 (default [`WATER_DENSITY`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<f64>,
+    /// The current: a constant velocity (m/s, world frame) over the whole region; a current that
+    /// differs by place is one water entry per region.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub current: Option<[f64; 3]>,
+    /// Coefficients over [`DEFAULT_COEFFICIENTS`]; a robot file's `water` keys override them per link.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coefficients: Option<CoefficientsFile>,
 }
 
 /// A checked water medium.
@@ -25,18 +167,775 @@ pub struct WaterFile {
 pub struct Water {
     /// Where it is.
     pub region: Region,
+    /// Density, kg/m^3.
+    pub density: f64,
+    /// Current velocity, m/s, world frame.
+    pub current: Vector3<f64>,
+    /// The medium's coefficients (links may override them).
+    pub coefficients: Coefficients,
 }
 
 impl WaterFile {
     /// Checks every value.
     pub fn resolve(&self, what: &str) -> Result<Water> {
+        let region = RegionFile {
+            area: self.area,
+            surface: self.surface,
+            depth: self.depth,
+        }
+        .resolve(what)?;
+        let density = self.density.unwrap_or(WATER_DENSITY);
+        let high = crate::limits::MAX_FLUID_DENSITY;
+        if !(density.is_finite() && density > 0.0 && density <= high) {
+            return Err(invalid(format!(
+                "{what}: density: must be a finite number in (0, {high}] kg/m^3, got {density}"
+            )));
+        }
+        let current = self.current.unwrap_or([0.0; 3]);
+        let high = crate::limits::MAX_CURRENT;
+        if current.iter().any(|v| !v.is_finite() || v.abs() > high) {
+            return Err(invalid(format!(
+                "{what}: current: must be finite velocities within +-{high} m/s, got {current:?}"
+            )));
+        }
+        let coefficients = self
+            .coefficients
+            .unwrap_or_default()
+            .over(DEFAULT_COEFFICIENTS, &format!("{what}: coefficients"))?;
         Ok(Water {
-            region: RegionFile {
-                area: self.area,
-                surface: self.surface,
-                depth: self.depth,
-            }
-            .resolve(what)?,
+            region,
+            density,
+            current: Vector3::from(current),
+            coefficients,
         })
+    }
+}
+
+/// A solid primitive of a link, in the link's centre-of-mass frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Solid {
+    /// A box of these half extents along its own x, y, z.
+    Box {
+        /// Half extents, metres.
+        half: [f64; 3],
+    },
+    /// A cylinder along its own z.
+    Cylinder {
+        /// Radius, metres.
+        radius: f64,
+        /// Length, metres.
+        length: f64,
+    },
+    /// A capsule along its own z: a cylinder of `length` with half spheres on its ends.
+    Capsule {
+        /// Radius, metres.
+        radius: f64,
+        /// Length of the cylinder between the half spheres, metres.
+        length: f64,
+    },
+    /// A sphere.
+    Sphere {
+        /// Radius, metres.
+        radius: f64,
+    },
+}
+
+impl Solid {
+    /// Volume, m^3.
+    pub fn volume(&self) -> f64 {
+        use std::f64::consts::PI;
+        match *self {
+            Solid::Box { half } => 8.0 * half[0] * half[1] * half[2],
+            Solid::Cylinder { radius, length } => PI * radius * radius * length,
+            Solid::Capsule { radius, length } => {
+                PI * radius * radius * length + 4.0 / 3.0 * PI * radius.powi(3)
+            }
+            Solid::Sphere { radius } => 4.0 / 3.0 * PI * radius.powi(3),
+        }
+    }
+
+    /// Half extents of the box that bounds it, in its own frame.
+    fn half_extents(&self) -> [f64; 3] {
+        match *self {
+            Solid::Box { half } => half,
+            Solid::Cylinder { radius, length } => [radius, radius, length / 2.0],
+            Solid::Capsule { radius, length } => [radius, radius, length / 2.0 + radius],
+            Solid::Sphere { radius } => [radius; 3],
+        }
+    }
+}
+
+/// A primitive placed in the link's centre-of-mass frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlacedSolid {
+    /// The shape.
+    pub solid: Solid,
+    /// Its pose in the link's centre-of-mass frame.
+    pub pose: Isometry3<f64>,
+}
+
+/// What the law needs of a link, computed once from its primitives and its mass: its axis, length,
+/// cross-section, and the Kelasidi coefficients that follow from them and the water's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hydro {
+    /// The primitives (for buoyancy).
+    pub solids: Vec<PlacedSolid>,
+    /// Total volume, m^3.
+    pub volume: f64,
+    /// The link's mass, kg (for the added mass's relaxation).
+    pub mass: f64,
+    /// Link frame (COM frame) rotation whose x is the link's axis and y, z its cross axes.
+    pub frame: UnitQuaternion<f64>,
+    /// Length `2 l` along the axis, metres.
+    pub length: f64,
+    /// Half widths of the cross-section along the frame's y and z, metres.
+    pub half_width: [f64; 2],
+    /// `c_t` (along), N s^2/m^2.
+    pub c_t: f64,
+    /// `c_n` for motion along the frame's y and z.
+    pub c_n: [f64; 2],
+    /// `mu_n` for acceleration along the frame's y and z, kg.
+    pub mu_n: [f64; 2],
+    /// `lambda_1, lambda_2, lambda_3` about the frame's y and z.
+    pub lambda: [[f64; 3]; 2],
+    /// Spin damping about the axis: `rho pi C_f r^4 2l`.
+    pub spin: f64,
+    /// Linear drag weight (s/m).
+    pub linear: f64,
+}
+
+impl Hydro {
+    /// The link's hydrodynamic description: the axis is the longest side of its largest primitive
+    /// (by volume), the length is the extent of all primitives along it, the cross-section that of
+    /// the largest primitive. `what` names the link in messages: a link with no volume cannot be in
+    /// water.
+    pub fn new(
+        solids: &[PlacedSolid],
+        mass: f64,
+        density: f64,
+        c: Coefficients,
+        what: &str,
+    ) -> Result<Hydro> {
+        use std::f64::consts::PI;
+        let volume: f64 = solids.iter().map(|s| s.solid.volume()).sum();
+        let largest = solids
+            .iter()
+            .filter(|s| s.solid.volume() > 0.0)
+            .max_by(|a, b| a.solid.volume().total_cmp(&b.solid.volume()));
+        let Some(largest) = largest.filter(|_| volume.is_finite() && volume > 0.0) else {
+            return Err(invalid(format!(
+                "{what}: has no volume (no box, cylinder, capsule or sphere collision shape), so water \
+                 cannot act on it"
+            )));
+        };
+        let half = largest.solid.half_extents();
+        // The primitive's longest side is the link's axis; its other two sides are the cross axes.
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&i, &j| half[j].total_cmp(&half[i]));
+        let rot = largest.pose.rotation;
+        let axis = rot * Vector3::ith(order[0], 1.0);
+        let e2 = rot * Vector3::ith(order[1], 1.0);
+        let e3 = axis.cross(&e2);
+        let frame =
+            UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_basis_unchecked(&[
+                axis, e2, e3,
+            ]));
+        // Extent of every primitive along the axis.
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for s in solids {
+            let h = s.solid.half_extents();
+            let c0 = s.pose.translation.vector.dot(&axis);
+            let r = s.pose.rotation.to_rotation_matrix();
+            let reach: f64 = (0..3)
+                .map(|k| h[k] * (r.matrix().column(k).dot(&axis)).abs())
+                .sum();
+            lo = lo.min(c0 - reach);
+            hi = hi.max(c0 + reach);
+        }
+        let length = hi - lo;
+        let (w2, w3) = (half[order[1]], half[order[2]]);
+        let l = length / 2.0;
+        let rho = density;
+        let r_mean = (w2 + w3) / 2.0;
+        // Kelasidi's relations, with (a, b) the semi-axes: for motion along e2 the projected width is
+        // 2 w3 and the added mass rho pi w3^2 per length (and the other way round).
+        let c_t = 0.5 * rho * PI * c.skin_friction * (w2 + w3) * length;
+        let c_n = [
+            0.5 * rho * c.drag * 2.0 * w3 * length,
+            0.5 * rho * c.drag * 2.0 * w2 * length,
+        ];
+        let mu_n = [
+            rho * PI * c.added_mass * w3 * w3 * length,
+            rho * PI * c.added_mass * w2 * w2 * length,
+        ];
+        let lambda1 = rho * PI * c.added_inertia * (w2 * w2 - w3 * w3).powi(2) * l.powi(3) / 12.0;
+        let lambda2 = rho * PI * c.skin_friction * (w2 + w3) * l.powi(3) / 6.0;
+        let lambda3 = rho * PI * c.skin_friction * (w2 + w3) * l.powi(4) / 8.0;
+        Ok(Hydro {
+            solids: solids.to_vec(),
+            volume,
+            mass,
+            frame,
+            length,
+            half_width: [w2, w3],
+            c_t,
+            c_n,
+            mu_n,
+            lambda: [[lambda1, lambda2, lambda3]; 2],
+            spin: rho * PI * c.skin_friction * r_mean.powi(4) * length,
+            linear: c.linear,
+        })
+    }
+}
+
+/// A link's state, world frame: its COM pose and velocities.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct State {
+    /// COM pose.
+    pub pose: Isometry3<f64>,
+    /// COM linear velocity, m/s.
+    pub linear: Vector3<f64>,
+    /// Angular velocity, rad/s.
+    pub angular: Vector3<f64>,
+}
+
+/// What water keeps of a link between steps: the previous velocities and the relaxed accelerations
+/// of the added mass and added inertia.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Memory {
+    /// The previous step's linear and angular velocity (none before the first step in water).
+    pub previous: Option<(Vector3<f64>, Vector3<f64>)>,
+    /// Relaxed linear acceleration, world frame.
+    pub accel: Vector3<f64>,
+    /// Relaxed angular acceleration, world frame.
+    pub angular_accel: Vector3<f64>,
+}
+
+/// Force (world frame, at the COM) and torque (world frame, about the COM).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Force {
+    /// Force, N.
+    pub force: Vector3<f64>,
+    /// Torque about the COM, N m.
+    pub torque: Vector3<f64>,
+}
+
+/// Submerged volume (m^3) and the centre of that volume (world frame) of one placed primitive with
+/// the world pose `pose`, below the plane z = `surface`.
+pub fn submerged(solid: &Solid, pose: &Isometry3<f64>, surface: f64) -> (f64, Point3<f64>) {
+    let center = pose.translation.vector;
+    let rot = pose.rotation.to_rotation_matrix();
+    let m = rot.matrix();
+    let half = solid.half_extents();
+    // Vertical half extent of the bounding box: every point lies within it.
+    let reach: f64 = (0..3).map(|k| half[k] * m[(2, k)].abs()).sum();
+    let volume = solid.volume();
+    if center.z + reach <= surface {
+        return (volume, Point3::from(center));
+    }
+    if center.z - reach >= surface {
+        return (0.0, Point3::from(center));
+    }
+    match *solid {
+        Solid::Sphere { radius } => sphere_cap(radius, center, surface),
+        Solid::Box { half } => {
+            // Cells of a 4 x 4 x 4 split, each with its submerged fraction linear in depth: exact
+            // when the faces are vertical or horizontal.
+            const N: usize = 4;
+            let cell = [half[0] / N as f64, half[1] / N as f64, half[2] / N as f64];
+            let cell_reach: f64 = (0..3).map(|k| cell[k] * m[(2, k)].abs()).sum();
+            let cell_volume = volume / (N * N * N) as f64;
+            let mut acc = Accumulator::default();
+            for i in 0..N {
+                for j in 0..N {
+                    for k in 0..N {
+                        let local = Vector3::new(
+                            -half[0] + (2 * i + 1) as f64 * cell[0],
+                            -half[1] + (2 * j + 1) as f64 * cell[1],
+                            -half[2] + (2 * k + 1) as f64 * cell[2],
+                        );
+                        acc.add_linear(center + m * local, cell_reach, cell_volume, surface);
+                    }
+                }
+            }
+            acc.finish(center)
+        }
+        Solid::Cylinder { radius, length } => {
+            let mut acc = Accumulator::default();
+            cylinder_slices(&mut acc, radius, length, center, m, surface);
+            acc.finish(center)
+        }
+        Solid::Capsule { radius, length } => {
+            let mut acc = Accumulator::default();
+            cylinder_slices(&mut acc, radius, length, center, m, surface);
+            // The two half spheres as one sphere's worth, split between the ends.
+            let axis = m.column(2).into_owned();
+            for end in [-1.0, 1.0] {
+                let c = center + axis * (end * length / 2.0);
+                let (v, p) = sphere_cap(radius, c, surface);
+                acc.volume += v / 2.0;
+                acc.moment += p.coords * (v / 2.0);
+            }
+            acc.finish(center)
+        }
+    }
+}
+
+#[derive(Default)]
+struct Accumulator {
+    volume: f64,
+    moment: Vector3<f64>,
+}
+
+impl Accumulator {
+    /// A piece of `volume` centred at `c` reaching `reach` above and below it, its submerged fraction
+    /// linear in its depth; the submerged part's centre at the middle of its submerged height.
+    fn add_linear(&mut self, c: Vector3<f64>, reach: f64, volume: f64, surface: f64) {
+        let bottom = c.z - reach;
+        let top = (c.z + reach).min(surface);
+        if top <= bottom {
+            return;
+        }
+        let fraction = if reach > 0.0 {
+            (top - bottom) / (2.0 * reach)
+        } else {
+            1.0
+        };
+        let v = volume * fraction;
+        self.volume += v;
+        self.moment += Vector3::new(c.x, c.y, (bottom + top) / 2.0) * v;
+    }
+
+    fn finish(self, center: Vector3<f64>) -> (f64, Point3<f64>) {
+        if self.volume > 0.0 {
+            (self.volume, Point3::from(self.moment / self.volume))
+        } else {
+            (0.0, Point3::from(center))
+        }
+    }
+}
+
+/// A spherical cap: the part of a sphere below the plane, exactly.
+fn sphere_cap(radius: f64, center: Vector3<f64>, surface: f64) -> (f64, Point3<f64>) {
+    use std::f64::consts::PI;
+    let s = (surface - (center.z - radius)).clamp(0.0, 2.0 * radius);
+    let volume = PI * s * s * (3.0 * radius - s) / 3.0;
+    if volume <= 0.0 {
+        return (0.0, Point3::from(center));
+    }
+    // Centroid of a cap of height s lies 3 (2r - s)^2 / (4 (3r - s)) from the sphere's centre.
+    let offset = 3.0 * (2.0 * radius - s).powi(2) / (4.0 * (3.0 * radius - s));
+    (volume, Point3::new(center.x, center.y, center.z - offset))
+}
+
+/// A cylinder as 8 slices along its axis, each a disc whose submerged fraction is linear in its depth
+/// (a vertical disc's exact fraction is the circular segment's; the linear one is within 5 % of it).
+fn cylinder_slices(
+    acc: &mut Accumulator,
+    radius: f64,
+    length: f64,
+    center: Vector3<f64>,
+    m: &nalgebra::Matrix3<f64>,
+    surface: f64,
+) {
+    use std::f64::consts::PI;
+    const N: usize = 8;
+    let axis = m.column(2).into_owned();
+    let uz = axis.z.abs().min(1.0);
+    let t = length / N as f64;
+    let reach = uz * t / 2.0 + radius * (1.0 - uz * uz).sqrt();
+    let v = PI * radius * radius * t;
+    for i in 0..N {
+        let c = center + axis * (-length / 2.0 + (i as f64 + 0.5) * t);
+        acc.add_segment(
+            c,
+            reach,
+            v,
+            surface,
+            radius * (1.0 - uz * uz).sqrt() / reach.max(1e-300),
+        );
+    }
+}
+
+impl Accumulator {
+    /// As [`Accumulator::add_linear`], with the fraction blended towards a circular segment's by
+    /// `round` (the share of the piece's height that a round cross-section makes).
+    fn add_segment(&mut self, c: Vector3<f64>, reach: f64, volume: f64, surface: f64, round: f64) {
+        if reach <= 0.0 {
+            return self.add_linear(c, reach, volume, surface);
+        }
+        let h = ((surface - (c.z - reach)) / (2.0 * reach)).clamp(0.0, 1.0);
+        if h <= 0.0 {
+            return;
+        }
+        // Circular segment of relative height h: (theta - sin theta) / 2 pi, theta = 2 acos(1 - 2h).
+        let theta = 2.0 * (1.0 - 2.0 * h).clamp(-1.0, 1.0).acos();
+        let segment = (theta - theta.sin()) / std::f64::consts::TAU;
+        let round = round.clamp(0.0, 1.0);
+        let fraction = (1.0 - round) * h + round * segment;
+        let bottom = c.z - reach;
+        let top = (c.z + reach).min(surface);
+        let v = volume * fraction;
+        self.volume += v;
+        self.moment += Vector3::new(c.x, c.y, (bottom + top) / 2.0) * v;
+    }
+}
+
+impl Water {
+    /// The force and torque water puts on a link of `hydro` in `state` over a step of `dt` seconds,
+    /// with gravity `gravity` (m/s^2, world frame), and updates the link's `memory`. A link whose
+    /// centre of mass is outside the region's footprint, or below its bottom, feels nothing.
+    pub fn wrench_of(
+        &self,
+        hydro: &Hydro,
+        state: &State,
+        dt: f64,
+        gravity: Vector3<f64>,
+        memory: &mut Memory,
+    ) -> Force {
+        let p = state.pose.translation.vector;
+        if !self.region.covers(p.x, p.y) || p.z < self.region.min[2] {
+            memory.previous = None;
+            return Force::default();
+        }
+        let surface = self.region.surface();
+        let mut volume = 0.0;
+        let mut moment = Vector3::zeros();
+        for s in &hydro.solids {
+            let pose = state.pose * s.pose;
+            let (v, c) = submerged(&s.solid, &pose, surface);
+            volume += v;
+            moment += c.coords * v;
+        }
+        if volume <= 0.0 {
+            memory.previous = None;
+            return Force::default();
+        }
+        let wet = (volume / hydro.volume).min(1.0);
+        let mut out = Force::default();
+        // Buoyancy at the centre of the submerged volume.
+        let buoyancy = -gravity * (self.density * volume);
+        out.force += buoyancy;
+        out.torque += (moment / volume - p).cross(&buoyancy);
+
+        // Relative velocity in the link's frame (x along, y and z across).
+        let frame = state.pose.rotation * hydro.frame;
+        let v = frame.inverse_transform_vector(&(state.linear - self.current));
+        let w = frame.inverse_transform_vector(&state.angular);
+        let lin = hydro.linear;
+        let drag = |c: f64, u: f64| -c * (lin * u + u.abs() * u);
+        let mut f = Vector3::new(
+            drag(hydro.c_t, v.x),
+            drag(hydro.c_n[0], v.y),
+            drag(hydro.c_n[1], v.z),
+        );
+        let mut t = Vector3::new(
+            -hydro.spin * w.x.abs() * w.x,
+            -hydro.lambda[0][1] * lin * w.y - hydro.lambda[0][2] * w.y.abs() * w.y,
+            -hydro.lambda[1][1] * lin * w.z - hydro.lambda[1][2] * w.z.abs() * w.z,
+        );
+        // Added mass and inertia from the relaxed accelerations (see the module's notes).
+        if let Some((v0, w0)) = memory.previous {
+            if dt > 0.0 {
+                let mass = hydro.mass.max(f64::MIN_POSITIVE);
+                let ratio = hydro.mu_n[0].max(hydro.mu_n[1]) / mass;
+                let k = 1.0 / (1.0 + ratio);
+                memory.accel += ((state.linear - v0) / dt - memory.accel) * k;
+                memory.angular_accel += ((state.angular - w0) / dt - memory.angular_accel) * k;
+            }
+        }
+        memory.previous = Some((state.linear, state.angular));
+        let a = frame.inverse_transform_vector(&memory.accel);
+        let alpha = frame.inverse_transform_vector(&memory.angular_accel);
+        f.y -= hydro.mu_n[0] * a.y;
+        f.z -= hydro.mu_n[1] * a.z;
+        t.y -= hydro.lambda[0][0] * alpha.y;
+        t.z -= hydro.lambda[1][0] * alpha.z;
+        out.force += frame * (f * wet);
+        out.torque += frame * (t * wet);
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    fn water(current: [f64; 3]) -> Water {
+        WaterFile {
+            area: [-100.0, -100.0, 100.0, 100.0],
+            surface: 0.0,
+            depth: 100.0,
+            density: Some(1000.0),
+            current: Some(current),
+            coefficients: None,
+        }
+        .resolve("media[0]")
+        .unwrap()
+    }
+
+    fn cylinder_link(radius: f64, length: f64, mass: f64, c: Coefficients) -> Hydro {
+        // A cylinder along the link's x (its own z turned onto x).
+        let pose = Isometry3::from_parts(
+            Default::default(),
+            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI / 2.0),
+        );
+        Hydro::new(
+            &[PlacedSolid {
+                solid: Solid::Cylinder { radius, length },
+                pose,
+            }],
+            mass,
+            1000.0,
+            c,
+            "link",
+        )
+        .unwrap()
+    }
+
+    fn at(z: f64, v: Vector3<f64>) -> State {
+        State {
+            pose: Isometry3::translation(0.0, 0.0, z),
+            linear: v,
+            angular: Vector3::zeros(),
+        }
+    }
+
+    #[test]
+    fn archimedes_fully_and_half_submerged() {
+        let w = water([0.0; 3]);
+        let g = Vector3::new(0.0, 0.0, -9.81);
+        // A 0.2 x 0.2 x 0.2 box: 8 litres, 78.48 N when under, 39.24 N half under.
+        let hydro = Hydro::new(
+            &[PlacedSolid {
+                solid: Solid::Box { half: [0.1; 3] },
+                pose: Isometry3::identity(),
+            }],
+            1.0,
+            1000.0,
+            Coefficients::default(),
+            "box",
+        )
+        .unwrap();
+        let mut m = Memory::default();
+        let f = w.wrench_of(&hydro, &at(-1.0, Vector3::zeros()), 1.0 / 240.0, g, &mut m);
+        assert!(
+            (f.force.z - 1000.0 * 9.81 * 0.008).abs() < 1e-9,
+            "{}",
+            f.force.z
+        );
+        let mut m = Memory::default();
+        let f = w.wrench_of(&hydro, &at(0.0, Vector3::zeros()), 1.0 / 240.0, g, &mut m);
+        assert!(
+            (f.force.z - 1000.0 * 9.81 * 0.004).abs() < 1e-9,
+            "{}",
+            f.force.z
+        );
+        // 3 cm under: draft 0.13 m of 0.2.
+        let mut m = Memory::default();
+        let f = w.wrench_of(&hydro, &at(0.03, Vector3::zeros()), 1.0 / 240.0, g, &mut m);
+        assert!(
+            (f.force.z - 1000.0 * 9.81 * 0.04 * 0.07).abs() < 1e-9,
+            "{}",
+            f.force.z
+        );
+        // The half-submerged box's buoyancy acts at the middle of its wet half: no torque upright.
+        assert!(f.torque.norm() < 1e-12);
+    }
+
+    #[test]
+    fn sphere_cap_matches_the_closed_form() {
+        // Half a sphere: 2/3 pi r^3, centroid 3r/8 below the centre.
+        let (v, c) = submerged(&Solid::Sphere { radius: 0.1 }, &Isometry3::identity(), 0.0);
+        assert!((v - 2.0 / 3.0 * PI * 1e-3).abs() < 1e-15);
+        assert!((c.z + 3.0 * 0.1 / 8.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn tilted_box_volume_is_close() {
+        // A cube turned 30 degrees about x, its centre on the surface: half of it is under by symmetry.
+        let pose = Isometry3::from_parts(
+            Default::default(),
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI / 6.0),
+        );
+        let (v, _) = submerged(&Solid::Box { half: [0.1; 3] }, &pose, 0.0);
+        assert!((v - 0.004).abs() < 1e-12, "{v}");
+        // A horizontal cylinder half under: half its volume.
+        let pose = Isometry3::from_parts(
+            Default::default(),
+            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI / 2.0),
+        );
+        let (v, _) = submerged(
+            &Solid::Cylinder {
+                radius: 0.05,
+                length: 0.2,
+            },
+            &pose,
+            0.0,
+        );
+        assert!((v / (PI * 0.0025 * 0.2) - 0.5).abs() < 1e-12, "{v}");
+        // A quarter of its diameter under: the circular segment, (theta - sin theta) / 2 pi with
+        // theta = 2 acos(0.5), 19.55 % of the volume.
+        let (v, _) = submerged(
+            &Solid::Cylinder {
+                radius: 0.05,
+                length: 0.2,
+            },
+            &(Isometry3::translation(0.0, 0.0, 0.025) * pose),
+            0.0,
+        );
+        let theta = 2.0 * 0.5f64.acos();
+        let exact = (theta - theta.sin()) / (2.0 * PI);
+        assert!((v / (PI * 0.0025 * 0.2) - exact).abs() < 1e-9, "{v}");
+    }
+
+    #[test]
+    fn drag_along_and_across_follows_the_coefficients() {
+        let c = Coefficients::default();
+        let (r, len) = (0.05, 0.2);
+        let hydro = cylinder_link(r, len, 1.0, c);
+        // Kelasidi's relations for a circular cylinder (a = b = r).
+        let c_t = 0.5 * 1000.0 * PI * 0.03 * (2.0 * r) * len;
+        let c_n = 0.5 * 1000.0 * 2.0 * (2.0 * r) * len;
+        assert!((hydro.c_t - c_t).abs() < 1e-12);
+        assert!((hydro.c_n[0] - c_n).abs() < 1e-12 && (hydro.c_n[1] - c_n).abs() < 1e-12);
+        assert!((hydro.mu_n[0] - 1000.0 * PI * r * r * len).abs() < 1e-12);
+        assert_eq!(hydro.lambda[0][0], 0.0);
+        let w = water([0.0; 3]);
+        let g = Vector3::zeros();
+        // 0.3 m/s along the link (x), 0.2 m/s across it (y).
+        let mut m = Memory::default();
+        let f = w.wrench_of(
+            &hydro,
+            &at(-1.0, Vector3::new(0.3, 0.2, 0.0)),
+            0.01,
+            g,
+            &mut m,
+        );
+        assert!(
+            (f.force.x + c_t * (0.3 + 0.09)).abs() < 1e-12,
+            "{}",
+            f.force.x
+        );
+        assert!(
+            (f.force.y + c_n * (0.2 + 0.04)).abs() < 1e-12,
+            "{}",
+            f.force.y
+        );
+        assert!(f.force.z.abs() < 1e-12);
+        // In a current equal to the link's velocity: no drag at all.
+        let w = water([0.3, 0.2, 0.0]);
+        let mut m = Memory::default();
+        let f = w.wrench_of(
+            &hydro,
+            &at(-1.0, Vector3::new(0.3, 0.2, 0.0)),
+            0.01,
+            g,
+            &mut m,
+        );
+        assert!(f.force.norm() < 1e-12);
+    }
+
+    /// A sinking sphere-less cylinder, falling broadside, integrated here with the law's own forces:
+    /// reaches the velocity where weight - buoyancy = c_n (v + v^2) (the drag law's terminal speed).
+    #[test]
+    fn terminal_velocity_of_a_sinking_link() {
+        let c = Coefficients::default();
+        let (r, len) = (0.02, 0.3);
+        let volume = PI * r * r * len;
+        let mass = 1500.0 * volume; // 1.5 times water's density
+        let hydro = cylinder_link(r, len, mass, c);
+        let w = water([0.0; 3]);
+        let g = Vector3::new(0.0, 0.0, -9.81);
+        let mut m = Memory::default();
+        let (mut z, mut v) = (-1.0, 0.0);
+        let dt = 1.0 / 240.0;
+        for _ in 0..2400 {
+            let f = w.wrench_of(&hydro, &at(z, Vector3::new(0.0, 0.0, v)), dt, g, &mut m);
+            v += dt * (f.force.z / mass - 9.81);
+            z += dt * v;
+        }
+        let net = (mass - 1000.0 * volume) * 9.81;
+        let cn = hydro.c_n[1];
+        // c_n (u + u^2) = net, u > 0 the sinking speed.
+        let u = (-1.0 + (1.0 + 4.0 * net / cn).sqrt()) / 2.0;
+        assert!((-v - u).abs() < 1e-3 * u, "{v} vs {u}");
+    }
+
+    /// The relaxed added mass stays bounded where the explicit one diverges: a neutrally buoyant link
+    /// (mu_n = m) pushed across by a constant force accelerates at F / (m + mu_n).
+    #[test]
+    fn added_mass_is_stable_and_implicit_in_steady_state() {
+        let c = Coefficients {
+            drag: 0.0,
+            skin_friction: 0.0,
+            linear: 0.0,
+            ..Coefficients::default()
+        };
+        let (r, len) = (0.05, 0.2);
+        let mass = 1000.0 * PI * r * r * len;
+        let hydro = cylinder_link(r, len, mass, c);
+        assert!((hydro.mu_n[0] - mass).abs() < 1e-12);
+        let w = water([0.0; 3]);
+        let mut m = Memory::default();
+        let dt = 1.0 / 240.0;
+        let push = 1.0;
+        let mut v = 0.0;
+        let mut last_a = 0.0;
+        for _ in 0..240 {
+            let f = w.wrench_of(
+                &hydro,
+                &at(-1.0, Vector3::new(0.0, v, 0.0)),
+                dt,
+                Vector3::zeros(),
+                &mut m,
+            );
+            let a = (push + f.force.y) / mass;
+            v += dt * a;
+            last_a = a;
+        }
+        assert!(
+            (last_a - push / (2.0 * mass)).abs() < 1e-9 * last_a,
+            "{last_a}"
+        );
+    }
+
+    #[test]
+    fn bad_input_is_one_line_naming_the_key() {
+        let mut file = WaterFile {
+            area: [0.0, 0.0, 1.0, 1.0],
+            surface: 0.0,
+            depth: 1.0,
+            density: Some(-1.0),
+            current: None,
+            coefficients: None,
+        };
+        let e = file
+            .resolve("world.yaml: media[0]")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("media[0]: density"), "{e}");
+        file.density = None;
+        file.current = Some([f64::NAN, 0.0, 0.0]);
+        let e = file.resolve("media[0]").unwrap_err().to_string();
+        assert!(e.contains("media[0]: current"), "{e}");
+        file.current = None;
+        file.coefficients = Some(CoefficientsFile {
+            drag: Some(-2.0),
+            ..Default::default()
+        });
+        let e = file.resolve("media[0]").unwrap_err().to_string();
+        assert!(e.contains("coefficients: drag"), "{e}");
+        let e = serde_norway::from_str::<WaterFile>(
+            "{area: [0, 0, 1, 1], depth: 1, coefficients: {cd: 1}}",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("cd"), "{e}");
+        let e = Hydro::new(&[], 1.0, 1000.0, Coefficients::default(), "links: tail")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("links: tail: has no volume"), "{e}");
     }
 }
