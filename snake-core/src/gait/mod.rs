@@ -15,11 +15,13 @@ pub mod joints;
 pub mod serpenoid;
 pub mod sine;
 pub mod steered;
+pub mod swim;
 
 pub use joints::{JointRole, JointRoles};
 pub use serpenoid::{Serpenoid, SerpenoidParams};
 pub use sine::LateralUndulation;
 pub use steered::SteeredWave;
+pub use swim::{Swim, SwimParams, SwimPattern};
 
 use crate::error::{invalid, Result};
 
