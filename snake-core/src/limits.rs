@@ -217,6 +217,29 @@ pub const MAX_NESTING: usize = 64;
 /// Most attributes of one XML element (a URDF tag has at most a handful).
 pub const MAX_XML_ATTRIBUTES: usize = 64;
 
+/// Most media (granular or water) one world file may list.
+pub const MAX_MEDIA: usize = 16;
+
+/// Most surface elements a medium cuts one link into ([`crate::media::geometry`]): a 10-joint snake
+/// at the most costs 45,000 element evaluations a step.
+pub const MAX_MEDIUM_ELEMENTS: usize = 4096;
+
+/// Range of a medium's surface element size, metres (`(low, high]`): 0.1 mm to 1 m.
+pub const MEDIUM_ELEMENT: (f64, f64) = (1.0e-4, 1.0);
+
+/// Largest strength `zeta` of a granular medium, N/m^3 (Li et al. 2013's media lie near 1e5 to 1e6;
+/// 1e9 is a rock, not a granular medium).
+pub const MAX_GRANULAR_ZETA: f64 = 1.0e9;
+
+/// Largest body-grain friction coefficient of a granular medium.
+pub const MAX_GRANULAR_FRICTION: f64 = 10.0;
+
+/// Range of a granular medium's elastic displacement at yield, metres (`(low, high]`).
+pub const GRANULAR_ELASTIC: (f64, f64) = (1.0e-6, 0.1);
+
+/// Largest magnitude of a coefficient of a granular coefficient table (Li et al.'s lie within 0.4).
+pub const MAX_GRANULAR_COEFFICIENT: f64 = 100.0;
+
 /// Checks a joint count against `[1, MAX_JOINTS]`, the one check of it in Rust (snake files, env
 /// keywords, run configurations and every command go through it); the error is about the key
 /// `joints`. Below 1 it says `must be in [1, 128], got 0`, above `must be at most 128, got N` (the
@@ -419,6 +442,15 @@ pub const ALL: &[(&str, LimitValue)] = {
         ("csv_bytes", Int(MAX_CSV_BYTES)),
         ("nesting", Int(MAX_NESTING as u64)),
         ("xml_attributes", Int(MAX_XML_ATTRIBUTES as u64)),
+        ("media", Int(MAX_MEDIA as u64)),
+        ("medium_elements", Int(MAX_MEDIUM_ELEMENTS as u64)),
+        ("medium_element_min", Float(MEDIUM_ELEMENT.0)),
+        ("medium_element_max", Float(MEDIUM_ELEMENT.1)),
+        ("granular_zeta", Float(MAX_GRANULAR_ZETA)),
+        ("granular_friction", Float(MAX_GRANULAR_FRICTION)),
+        ("granular_elastic_min", Float(GRANULAR_ELASTIC.0)),
+        ("granular_elastic_max", Float(GRANULAR_ELASTIC.1)),
+        ("granular_coefficient", Float(MAX_GRANULAR_COEFFICIENT)),
         ("error_chars", Int(crate::error::MAX_ERROR_CHARS as u64)),
     ]
 };

@@ -34,6 +34,7 @@ use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, GaitKind, JointRoles, LateralUndulation, Serpenoid};
 use crate::limits::{short, MAX_MOTOR_VELOCITY, MAX_URDF_BYTES};
 use crate::math::StartPose;
+use crate::media::{MediaState, Primitive};
 use crate::recorded::{FileOrRecord, Reader, RecordedFiles};
 use crate::skin::{SkinAxis, SkinFriction};
 use crate::urdf::{Geometry, InertiaSource, UrdfRobot};
@@ -609,6 +610,8 @@ pub struct Robot {
     max_velocities: Option<Vec<f64>>,
     dt: f64,
     steps: u64,
+    /// The world file's media acting on the robot; `None` without media (nothing runs then).
+    media: Option<MediaState>,
 }
 
 impl Robot {
@@ -656,7 +659,20 @@ impl Robot {
             .iter()
             .any(Option::is_some)
             .then(|| limits.iter().map(|v| v.unwrap_or(0.0)).collect());
+        let shapes: Vec<Vec<Primitive>> = spec
+            .urdf
+            .links
+            .iter()
+            .map(|l| {
+                l.collisions
+                    .iter()
+                    .map(|c| Primitive::from_urdf(&c.geometry))
+                    .collect()
+            })
+            .collect();
+        let media = MediaState::for_body(&ground.media, &world, body, &shapes)?;
         Ok(Robot {
+            media,
             world,
             body,
             ground: ground_body,
@@ -704,6 +720,11 @@ impl Robot {
         (&self.efforts, self.motors)
     }
 
+    /// The media acting on the robot, when its world has any.
+    pub fn media(&self) -> Option<&MediaState> {
+        self.media.as_ref()
+    }
+
     /// pybullet joint indices of the movable joints.
     pub fn movable_joints(&self) -> &[i32] {
         &self.movable
@@ -745,6 +766,9 @@ impl Simulation for Robot {
         )
     }
     fn step(&mut self) -> Result<()> {
+        if let Some(media) = &mut self.media {
+            media.apply(&mut self.world, self.body)?;
+        }
         self.world.step()?;
         self.steps += 1;
         self.world.check_finite_base(self.body, self.steps)

@@ -5,6 +5,7 @@ use nalgebra::Vector3;
 use crate::config::SnakeConfig;
 use crate::error::Result;
 use crate::math::StartPose;
+use crate::media::{MediaState, Primitive};
 use crate::world::{BaseState, BodyId, BoxChain, BoxLink, Dynamics, JointState, Pose, World};
 use crate::world_file::WorldSpec;
 
@@ -17,6 +18,8 @@ pub struct Snake {
     ground: BodyId,
     config: SnakeConfig,
     steps: u64,
+    /// The world file's media acting on the snake; `None` without media (nothing runs then).
+    media: Option<MediaState>,
 }
 
 impl Snake {
@@ -72,12 +75,16 @@ impl Snake {
                 world.set_skin_friction(body, Some(link), skin, SnakeConfig::HEAD_AXIS)?;
             }
         }
+        let cube = vec![Primitive::Box([h, h, h])];
+        let media =
+            MediaState::for_body(&ground.media, &world, body, &vec![cube; config.joints + 1])?;
         Ok(Snake {
             world,
             body,
             ground: ground_body,
             config: config.clone(),
             steps: 0,
+            media,
         })
     }
 
@@ -151,9 +158,17 @@ impl Snake {
 
     /// One physics step. Fails with [`crate::Error::NonFinite`] if the base or a joint left the finite range.
     pub fn step(&mut self) -> Result<()> {
+        if let Some(media) = &mut self.media {
+            media.apply(&mut self.world, self.body)?;
+        }
         self.world.step()?;
         self.steps += 1;
         self.world.check_finite_base(self.body, self.steps)
+    }
+
+    /// The media acting on the snake, when its world has any.
+    pub fn media(&self) -> Option<&MediaState> {
+        self.media.as_ref()
     }
 
     /// Pose and velocity of the base (the head cube).

@@ -44,12 +44,14 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
+use crate::limits::MAX_MEDIA;
 use crate::limits::{
     check_position, check_range, check_range_above, MAX_HEIGHTFIELD_BYTES, MAX_HEIGHTFIELD_SAMPLES,
     MAX_HEIGHTFIELD_SIDE, MAX_NOISE_LATTICE, MAX_OBSTACLES, MAX_OBSTACLE_SIZE, MAX_SLOPE_DEGREES,
     MAX_TERRAIN_HEIGHT, MAX_WORLD_FRICTION, MAX_YAW,
 };
 use crate::math::quaternion_from_euler;
+use crate::media::{Medium, MediumFile};
 use crate::recorded::{FileOrRecord, Reader, RecordedFiles};
 use crate::world::{BodyId, Dynamics, StaticShape, World};
 
@@ -285,6 +287,9 @@ pub struct WorldFile {
     pub obstacles: Vec<ObstacleFile>,
     /// A peg field, created after `obstacles`.
     pub pegs: Option<PegsFile>,
+    /// Media (granular, water) and the regions they fill (docs/media.md); none by default.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub media: Vec<MediumFile>,
 }
 
 /// A heightfield grid: `rows` values per line along x, `columns` lines along y.
@@ -409,6 +414,8 @@ pub struct WorldSpec {
     pub ground_friction: Option<f64>,
     /// Every obstacle in creation order.
     pub obstacles: Vec<Obstacle>,
+    /// The media, checked (empty: the rigid world of pybullet, built and stepped as before).
+    pub media: Vec<Medium>,
 }
 
 impl Default for WorldSpec {
@@ -418,6 +425,7 @@ impl Default for WorldSpec {
             ground: Ground::Plane,
             ground_friction: None,
             obstacles: Vec::new(),
+            media: Vec::new(),
         }
     }
 }
@@ -845,10 +853,31 @@ impl WorldFile {
                 obstacles.len()
             )));
         }
+        if self.media.len() > MAX_MEDIA {
+            return Err(invalid(format!(
+                "{shown}: media: {} media, at most {MAX_MEDIA}",
+                self.media.len()
+            )));
+        }
+        let media = self
+            .media
+            .iter()
+            .enumerate()
+            .map(|(k, m)| m.resolve(&format!("media[{k}]")).map_err(e))
+            .collect::<Result<Vec<_>>>()?;
+        if !matches!(ground, Ground::Plane)
+            && media.iter().any(|m| matches!(m, Medium::Granular(_)))
+        {
+            return Err(invalid(format!(
+                "{shown}: media: a granular medium needs the plane ground (ground: {{plane: {{}}}}): \
+                 the ground gives way inside its area"
+            )));
+        }
         Ok(WorldSpec {
             ground,
             ground_friction: self.ground_friction,
             obstacles,
+            media,
         })
     }
 }
@@ -870,6 +899,11 @@ impl Obstacle {
 }
 
 impl WorldSpec {
+    /// True when a granular medium makes the ground give way (docs/media.md).
+    pub fn has_granular(&self) -> bool {
+        self.media.iter().any(|m| matches!(m, Medium::Granular(_)))
+    }
+
     /// True for the plain flat plane (what every run used before world files).
     pub fn is_flat_plane(&self) -> bool {
         *self == WorldSpec::default()
@@ -887,7 +921,13 @@ impl WorldSpec {
     /// Adds the ground, its friction and the obstacles to `world` in the module docs' order; returns
     /// the ground's body and the obstacles' bodies.
     pub fn build(&self, world: &mut World) -> Result<(BodyId, Vec<BodyId>)> {
+        // The slabs and floors around and under granular media (none without them).
+        let mut slabs = Vec::new();
         let ground = match &self.ground {
+            Ground::Plane if self.has_granular() => {
+                slabs = crate::media::ground::build(&self.media, world)?;
+                slabs[0]
+            }
             // The exact calls of every run before world files.
             Ground::Plane => world.add_plane()?,
             Ground::Slope(_) => {
@@ -910,6 +950,10 @@ impl WorldSpec {
                 ..Dynamics::default()
             };
             world.change_dynamics(ground, None, &d)?;
+            // The slabs and floors around and under a granular medium are the ground too.
+            for &body in slabs.iter().skip(1) {
+                world.change_dynamics(body, None, &d)?;
+            }
         }
         let mut bodies = Vec::with_capacity(self.obstacles.len());
         for o in &self.obstacles {
