@@ -9,21 +9,25 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use snake_core::run_targets::{run_targets_until, Overrides};
+use snake_core::run_targets::{run_targets_until, run_windows_until, Overrides, Windows};
 use snake_core::{RecordedFiles, RobotRef, RobotSpec, StartPose, WorldRef, WorldSpec};
 
 use crate::to_py;
 
-/// simulate_robot(robot_path, targets, world_path=None, start=None, overrides_json="{}") ->
-/// (base, joints): `targets` float64 of shape (steps, joints) in the robot's movable-joint order;
+/// simulate_robot(robot_path, targets, world_path=None, start=None, overrides_json="{}",
+/// window=None, states=None) -> (base, joints): `targets` float64 of shape (steps, joints) in the
+/// robot's movable-joint order;
 /// `start` (x, y, z, yaw) or None for the robot file's start (raised by the world's ground, as
 /// `snake-cli run` does); `overrides_json` an object of `snakesim calibrate` fit keys. Returns the base
 /// pose after every step (steps, 7: x, y, z, qx, qy, qz, qw) and the joint angles (steps, joints).
+/// With `window` (physics steps) the run is cut into windows, window i > 0 restarting from row i - 1 of
+/// `states` (float64, (ceil(steps / window) - 1, 13 + 2 joints): the base's x, y, z, qx, qy, qz, qw,
+/// vx, vy, vz, wx, wy, wz, the joint angles, the joint velocities; snake-core's `run_windows_until`).
 /// Python's signal handlers run every 20 ms of the simulation, so Ctrl-C (KeyboardInterrupt) and
 /// whatever a handler raises (snakesim's SIGTERM) end it within a physics step of that.
 #[pyfunction]
-#[pyo3(signature = (robot_path, targets, world_path=None, start=None, overrides_json="{}"))]
-#[allow(clippy::type_complexity)]
+#[pyo3(signature = (robot_path, targets, world_path=None, start=None, overrides_json="{}", window=None, states=None))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn simulate_robot<'py>(
     py: Python<'py>,
     robot_path: PathBuf,
@@ -31,6 +35,8 @@ fn simulate_robot<'py>(
     world_path: Option<PathBuf>,
     start: Option<(f64, f64, f64, f64)>,
     overrides_json: &str,
+    window: Option<usize>,
+    states: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
     let spec = RobotSpec::load(&robot_path).map_err(to_py)?;
     let world = world_path
@@ -48,6 +54,15 @@ fn simulate_robot<'py>(
         )));
     }
     let rows = targets.as_slice()?.to_vec();
+    let states: Option<Vec<f64>> = match (window, &states) {
+        (None, None) => None,
+        (Some(_), Some(s)) => Some(s.as_slice()?.to_vec()),
+        _ => {
+            return Err(PyValueError::new_err(
+                "window and states go together: give both or neither",
+            ))
+        }
+    };
     let world_spec = world
         .as_ref()
         .map_or_else(WorldSpec::default, |w| w.spec().clone());
@@ -81,15 +96,24 @@ fn simulate_robot<'py>(
         }
     };
     let out = py
-        .detach(|| {
-            run_targets_until(
+        .detach(|| match (window, &states) {
+            (Some(length), Some(states)) => run_windows_until(
+                &spec,
+                start,
+                &world_spec,
+                &overrides,
+                &rows,
+                Windows { length, states },
+                &mut should_stop,
+            ),
+            _ => run_targets_until(
                 &spec,
                 start,
                 &world_spec,
                 &overrides,
                 &rows,
                 &mut should_stop,
-            )
+            ),
         })
         .map_err(to_py)?;
     let Some(out) = out else {
