@@ -51,6 +51,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::{invalid, Result};
 use crate::media::{Region, RegionFile};
 
+/// Standard gravity, m/s^2 (snakesim's worlds' default, `SnakeConfig::gravity`).
+pub const STANDARD_GRAVITY: f64 = 9.81;
+
 /// Fresh water at 20 degrees C, kg/m^3.
 pub const WATER_DENSITY: f64 = 998.2;
 
@@ -173,6 +176,9 @@ pub struct Water {
     pub current: Vector3<f64>,
     /// The medium's coefficients (links may override them).
     pub coefficients: Coefficients,
+    /// Gravity, m/s^2, world frame: standard gravity until the body that swims in it sets its
+    /// world's ([`Water::set_gravity`]).
+    pub gravity: Vector3<f64>,
 }
 
 impl WaterFile {
@@ -207,6 +213,7 @@ impl WaterFile {
             density,
             current: Vector3::from(current),
             coefficients,
+            gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),
         })
     }
 }
@@ -265,6 +272,37 @@ impl Solid {
     }
 }
 
+/// Refuses links without volume (no box, cylinder, capsule or sphere collision shape) in a world with
+/// water, naming the first (links are numbered as pybullet's, -1 the base).
+pub fn check_volumes(links: &[crate::media::geometry::LinkGeometry]) -> Result<()> {
+    for (k, link) in links.iter().enumerate() {
+        let volume = link.volume();
+        if volume.is_nan() || volume <= 0.0 {
+            return Err(invalid(format!(
+                "media: water: link {} has no volume (no box, cylinder, capsule or sphere collision \
+                 shape), so water cannot act on it",
+                k as i64 - 1
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A media shape as water's primitive.
+fn placed(s: &crate::media::geometry::Shape) -> PlacedSolid {
+    use crate::media::geometry::Primitive;
+    let solid = match s.primitive {
+        Primitive::Box(half) => Solid::Box { half },
+        Primitive::Cylinder { radius, length } => Solid::Cylinder { radius, length },
+        Primitive::Capsule { radius, length } => Solid::Capsule { radius, length },
+        Primitive::Sphere(radius) => Solid::Sphere { radius },
+    };
+    PlacedSolid {
+        solid,
+        pose: Isometry3::from_parts(s.pose.position.into(), s.pose.orientation),
+    }
+}
+
 /// A primitive placed in the link's centre-of-mass frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlacedSolid {
@@ -278,8 +316,6 @@ pub struct PlacedSolid {
 /// cross-section, and the Kelasidi coefficients that follow from them and the water's.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Hydro {
-    /// The primitives (for buoyancy).
-    pub solids: Vec<PlacedSolid>,
     /// Total volume, m^3.
     pub volume: f64,
     /// The link's mass, kg (for the added mass's relaxation).
@@ -309,17 +345,17 @@ impl Hydro {
     /// (by volume), the length is the extent of all primitives along it, the cross-section that of
     /// the largest primitive. `what` names the link in messages: a link with no volume cannot be in
     /// water.
-    pub fn new(
-        solids: &[PlacedSolid],
+    pub fn new<I: Iterator<Item = PlacedSolid> + Clone>(
+        solids: I,
         mass: f64,
         density: f64,
         c: Coefficients,
         what: &str,
     ) -> Result<Hydro> {
         use std::f64::consts::PI;
-        let volume: f64 = solids.iter().map(|s| s.solid.volume()).sum();
+        let volume: f64 = solids.clone().map(|s| s.solid.volume()).sum();
         let largest = solids
-            .iter()
+            .clone()
             .filter(|s| s.solid.volume() > 0.0)
             .max_by(|a, b| a.solid.volume().total_cmp(&b.solid.volume()));
         let Some(largest) = largest.filter(|_| volume.is_finite() && volume > 0.0) else {
@@ -372,7 +408,6 @@ impl Hydro {
         let lambda2 = rho * PI * c.skin_friction * (w2 + w3) * l.powi(3) / 6.0;
         let lambda3 = rho * PI * c.skin_friction * (w2 + w3) * l.powi(4) / 8.0;
         Ok(Hydro {
-            solids: solids.to_vec(),
             volume,
             mass,
             frame,
@@ -582,12 +617,61 @@ impl Accumulator {
 }
 
 impl Water {
+    /// Sets the gravity buoyancy works against (the world's, m/s^2).
+    pub fn set_gravity(&mut self, gravity: Vector3<f64>) {
+        self.gravity = gravity;
+    }
+
+    /// Water's force and torque on a link (the media's common interface, [`crate::media`]): the
+    /// link's primitives and mass from `link`, its state, the step `dt`; `memory` keeps the previous
+    /// velocities (`previous_linear`, `previous_angular`) and the relaxed linear and angular
+    /// accelerations of the added mass (`elements[0]`, `elements[1]`). A link with no volume feels
+    /// nothing (robots with water are checked for such links when they are built).
+    pub fn wrench(
+        &self,
+        link: &crate::media::geometry::LinkGeometry,
+        state: &crate::media::LinkState,
+        dt: f64,
+        memory: &mut crate::media::LinkMemory,
+    ) -> crate::media::Wrench {
+        let solids = link.shapes.iter().map(placed);
+        let Ok(hydro) = Hydro::new(
+            solids.clone(),
+            link.mass,
+            self.density,
+            self.coefficients,
+            "link",
+        ) else {
+            return crate::media::Wrench::default();
+        };
+        let mut mem = Memory {
+            previous: memory.previous_linear.zip(memory.previous_angular),
+            accel: memory.elements.first().copied().unwrap_or_default(),
+            angular_accel: memory.elements.get(1).copied().unwrap_or_default(),
+        };
+        let s = State {
+            pose: Isometry3::from_parts(state.pose.position.into(), state.pose.orientation),
+            linear: state.linear,
+            angular: state.angular,
+        };
+        let f = self.wrench_of(&hydro, solids, &s, dt, self.gravity, &mut mem);
+        memory.previous_linear = mem.previous.map(|p| p.0);
+        memory.previous_angular = mem.previous.map(|p| p.1);
+        memory.elements.clear();
+        memory.elements.extend([mem.accel, mem.angular_accel]);
+        crate::media::Wrench {
+            force: f.force,
+            torque: f.torque,
+        }
+    }
+
     /// The force and torque water puts on a link of `hydro` in `state` over a step of `dt` seconds,
     /// with gravity `gravity` (m/s^2, world frame), and updates the link's `memory`. A link whose
     /// centre of mass is outside the region's footprint, or below its bottom, feels nothing.
-    pub fn wrench_of(
+    pub fn wrench_of<I: Iterator<Item = PlacedSolid>>(
         &self,
         hydro: &Hydro,
+        solids: I,
         state: &State,
         dt: f64,
         gravity: Vector3<f64>,
@@ -601,7 +685,7 @@ impl Water {
         let surface = self.region.surface();
         let mut volume = 0.0;
         let mut moment = Vector3::zeros();
-        for s in &hydro.solids {
+        for s in solids {
             let pose = state.pose * s.pose;
             let (v, c) = submerged(&s.solid, &pose, surface);
             volume += v;
@@ -675,23 +759,23 @@ mod tests {
         .unwrap()
     }
 
-    fn cylinder_link(radius: f64, length: f64, mass: f64, c: Coefficients) -> Hydro {
+    fn cylinder_link(
+        radius: f64,
+        length: f64,
+        mass: f64,
+        c: Coefficients,
+    ) -> (Hydro, Vec<PlacedSolid>) {
         // A cylinder along the link's x (its own z turned onto x).
         let pose = Isometry3::from_parts(
             Default::default(),
             UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI / 2.0),
         );
-        Hydro::new(
-            &[PlacedSolid {
-                solid: Solid::Cylinder { radius, length },
-                pose,
-            }],
-            mass,
-            1000.0,
-            c,
-            "link",
-        )
-        .unwrap()
+        let solids = vec![PlacedSolid {
+            solid: Solid::Cylinder { radius, length },
+            pose,
+        }];
+        let hydro = Hydro::new(solids.iter().copied(), mass, 1000.0, c, "link").unwrap();
+        (hydro, solids)
     }
 
     fn at(z: f64, v: Vector3<f64>) -> State {
@@ -707,11 +791,12 @@ mod tests {
         let w = water([0.0; 3]);
         let g = Vector3::new(0.0, 0.0, -9.81);
         // A 0.2 x 0.2 x 0.2 box: 8 litres, 78.48 N when under, 39.24 N half under.
+        let solids = [PlacedSolid {
+            solid: Solid::Box { half: [0.1; 3] },
+            pose: Isometry3::identity(),
+        }];
         let hydro = Hydro::new(
-            &[PlacedSolid {
-                solid: Solid::Box { half: [0.1; 3] },
-                pose: Isometry3::identity(),
-            }],
+            solids.iter().copied(),
             1.0,
             1000.0,
             Coefficients::default(),
@@ -719,14 +804,28 @@ mod tests {
         )
         .unwrap();
         let mut m = Memory::default();
-        let f = w.wrench_of(&hydro, &at(-1.0, Vector3::zeros()), 1.0 / 240.0, g, &mut m);
+        let f = w.wrench_of(
+            &hydro,
+            solids.iter().copied(),
+            &at(-1.0, Vector3::zeros()),
+            1.0 / 240.0,
+            g,
+            &mut m,
+        );
         assert!(
             (f.force.z - 1000.0 * 9.81 * 0.008).abs() < 1e-9,
             "{}",
             f.force.z
         );
         let mut m = Memory::default();
-        let f = w.wrench_of(&hydro, &at(0.0, Vector3::zeros()), 1.0 / 240.0, g, &mut m);
+        let f = w.wrench_of(
+            &hydro,
+            solids.iter().copied(),
+            &at(0.0, Vector3::zeros()),
+            1.0 / 240.0,
+            g,
+            &mut m,
+        );
         assert!(
             (f.force.z - 1000.0 * 9.81 * 0.004).abs() < 1e-9,
             "{}",
@@ -734,7 +833,14 @@ mod tests {
         );
         // 3 cm under: draft 0.13 m of 0.2.
         let mut m = Memory::default();
-        let f = w.wrench_of(&hydro, &at(0.03, Vector3::zeros()), 1.0 / 240.0, g, &mut m);
+        let f = w.wrench_of(
+            &hydro,
+            solids.iter().copied(),
+            &at(0.03, Vector3::zeros()),
+            1.0 / 240.0,
+            g,
+            &mut m,
+        );
         assert!(
             (f.force.z - 1000.0 * 9.81 * 0.04 * 0.07).abs() < 1e-9,
             "{}",
@@ -794,7 +900,7 @@ mod tests {
     fn drag_along_and_across_follows_the_coefficients() {
         let c = Coefficients::default();
         let (r, len) = (0.05, 0.2);
-        let hydro = cylinder_link(r, len, 1.0, c);
+        let (hydro, solids) = cylinder_link(r, len, 1.0, c);
         // Kelasidi's relations for a circular cylinder (a = b = r).
         let c_t = 0.5 * 1000.0 * PI * 0.03 * (2.0 * r) * len;
         let c_n = 0.5 * 1000.0 * 2.0 * (2.0 * r) * len;
@@ -808,6 +914,7 @@ mod tests {
         let mut m = Memory::default();
         let f = w.wrench_of(
             &hydro,
+            solids.iter().copied(),
             &at(-1.0, Vector3::new(0.3, 0.2, 0.0)),
             0.01,
             g,
@@ -829,6 +936,7 @@ mod tests {
         let mut m = Memory::default();
         let f = w.wrench_of(
             &hydro,
+            solids.iter().copied(),
             &at(-1.0, Vector3::new(0.3, 0.2, 0.0)),
             0.01,
             g,
@@ -845,14 +953,21 @@ mod tests {
         let (r, len) = (0.02, 0.3);
         let volume = PI * r * r * len;
         let mass = 1500.0 * volume; // 1.5 times water's density
-        let hydro = cylinder_link(r, len, mass, c);
+        let (hydro, solids) = cylinder_link(r, len, mass, c);
         let w = water([0.0; 3]);
         let g = Vector3::new(0.0, 0.0, -9.81);
         let mut m = Memory::default();
         let (mut z, mut v) = (-1.0, 0.0);
         let dt = 1.0 / 240.0;
         for _ in 0..2400 {
-            let f = w.wrench_of(&hydro, &at(z, Vector3::new(0.0, 0.0, v)), dt, g, &mut m);
+            let f = w.wrench_of(
+                &hydro,
+                solids.iter().copied(),
+                &at(z, Vector3::new(0.0, 0.0, v)),
+                dt,
+                g,
+                &mut m,
+            );
             v += dt * (f.force.z / mass - 9.81);
             z += dt * v;
         }
@@ -875,7 +990,7 @@ mod tests {
         };
         let (r, len) = (0.05, 0.2);
         let mass = 1000.0 * PI * r * r * len;
-        let hydro = cylinder_link(r, len, mass, c);
+        let (hydro, solids) = cylinder_link(r, len, mass, c);
         assert!((hydro.mu_n[0] - mass).abs() < 1e-12);
         let w = water([0.0; 3]);
         let mut m = Memory::default();
@@ -886,6 +1001,7 @@ mod tests {
         for _ in 0..240 {
             let f = w.wrench_of(
                 &hydro,
+                solids.iter().copied(),
                 &at(-1.0, Vector3::new(0.0, v, 0.0)),
                 dt,
                 Vector3::zeros(),
@@ -933,9 +1049,15 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("cd"), "{e}");
-        let e = Hydro::new(&[], 1.0, 1000.0, Coefficients::default(), "links: tail")
-            .unwrap_err()
-            .to_string();
+        let e = Hydro::new(
+            std::iter::empty(),
+            1.0,
+            1000.0,
+            Coefficients::default(),
+            "links: tail",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("links: tail: has no volume"), "{e}");
     }
 }
