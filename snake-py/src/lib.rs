@@ -16,6 +16,7 @@ mod inputs;
 mod lock;
 mod native;
 mod simulate;
+mod swim;
 
 /// snake-core's errors as Python exceptions: bad input is a ValueError, a failing engine a RuntimeError.
 fn to_py(error: snake_core::Error) -> PyErr {
@@ -511,5 +512,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     inputs::register(m)?;
     lock::register(m)?;
     simulate::register(m)?;
+    swim::register(m)?;
     Ok(())
 }

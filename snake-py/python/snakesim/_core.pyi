@@ -175,6 +175,17 @@ def simulate_robot(
 def robot_joint_names(robot_path: str) -> list[str]: ...
 def robot_files(robot_path: str) -> list[str]: ...
 def world_files(world_path: str) -> list[str]: ...
+def swim_targets(
+    robot_path: str,
+    pattern: str,
+    alpha: float,
+    omega: float,
+    delta: float,
+    steps: int,
+    offset: float = 0.0,
+    ramp: float = 2.0,
+    dt: float = 1.0 / 240.0,
+) -> npt.NDArray[np.float64]: ...
 
 class SteerAssist:
     def __init__(self, config_json: str, residual: bool = False, near_goal: float = 0.0) -> None: ...
