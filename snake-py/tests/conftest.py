@@ -9,14 +9,17 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 # --no-loadscope-reorder`): each test file runs whole on one worker (its module fixtures made once, its
 # tests in their order). Files that share something outside their tmp_path take a lock for the module
 # (below), so that they never overlap: test_sweep.py's Ray head and test_sweep_local.py's checks of
-# /tmp/ray and /tmp/snakesim-ray-*.
-SHARED = {"test_sweep.py": "ray", "test_sweep_local.py": "ray"}
+# /tmp/ray and /tmp/snakesim-ray-*; test_doc_examples_more.py runs docs/sweeps.md's sweeps on a local
+# Ray.
+SHARED = {"test_sweep.py": "ray", "test_sweep_local.py": "ray", "test_doc_examples_more.py": "ray"}
 # The slowest files first (seconds of a serial run on the 2-core machine, loaded: test_wheel 207 with a
 # rebuild, test_tasks 180, test_goal 82, test_model_safety 57, test_writers 49, test_sweep 44,
 # test_calibrate 44, test_rerun 37; the other 25 files 70 together), so that no long file starts last and
 # leaves a core idle at the end; the rest keep their usual order.
 SLOWEST_FIRST = [
     "test_wheel.py",
+    "test_doc_examples.py",
+    "test_doc_examples_more.py",
     "test_tasks.py",
     "test_goal.py",
     "test_model_safety.py",

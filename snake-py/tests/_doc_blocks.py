@@ -1,0 +1,294 @@
+"""The shell commands and Python snippets of the docs, as snake-py/tests/test_doc_examples.py runs them.
+
+A page's fenced ```sh and ```python blocks are its examples (other fences are output, file formats,
+synopses or other languages). An HTML comment on the lines right above a block's fence says how the
+test treats it; the page's reader never sees it:
+
+    <!-- not run: REASON -->            the block is skipped; the reason is required
+    <!-- test: OLD => NEW -->           a literal substitution in the block before it runs (placeholders
+                                        such as a seed S; several are separated by ` ;; `)
+    <!-- test before: COMMAND -->       a shell command run (shortened like the block) before the block:
+                                        what the page assumes was done elsewhere, e.g. a run to export
+    <!-- test prelude: FILE ARGS -->    (Python) the file's code runs first in the same interpreter, with
+                                        ARGS as sys.argv[1:], e.g. a simulated robot for a control loop
+                                        written for hardware
+
+Long commands are shortened by the rules of `shorten` (fewer episodes, a tiny training); with
+SNAKESIM_DOC_TESTS=full in the environment they run as written.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import subprocess
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+
+#: The pages whose examples run: the README, docs/ and the model cards.
+PAGES = ["README.md", *(f"docs/{p.name}" for p in sorted((REPO / "docs").glob("*.md"))),
+         *(f"models/{p.name}" for p in sorted((REPO / "models").glob("*.md")))]
+
+RUN_LANGUAGES = {"sh": "sh", "bash": "sh", "python": "python"}
+FENCE = re.compile(r"^(\s*)```(\S*)\s*$")
+MARKER = re.compile(r"^\s*<!--\s*(not run|test before|test prelude|test)\s*:\s*(.*?)\s*-->\s*$")
+
+#: Run as written, no shortening (slow: full evaluations and trainings).
+FULL = os.environ.get("SNAKESIM_DOC_TESTS") == "full"
+
+#: The shortened training: one rollout of 4 envs x 256 steps, one update epoch, one evaluation episode.
+TINY_TRAINING = {
+    "timesteps": "1024",
+    "n_envs": "4",
+    "ppo.n_steps": "256",
+    "ppo.batch_size": "256",
+    "ppo.n_epochs": "1",
+    "eval_freq": "1024",
+    "eval_episodes": "1",
+    "checkpoint_freq": "1024",
+}
+
+
+@dataclass
+class Block:
+    page: str
+    line: int  # the fence's line, 1-based
+    language: str  # "sh" or "python"
+    text: str
+    not_run: str | None = None
+    substitutions: list[tuple[str, str]] = field(default_factory=list)
+    before: list[str] = field(default_factory=list)
+    prelude: str | None = None
+
+    @property
+    def name(self) -> str:
+        return f"{self.page}:{self.line}"
+
+    def prepared(self) -> str:
+        """The block's text with its substitutions, shortened unless SNAKESIM_DOC_TESTS=full."""
+        text = self.text
+        for old, new in self.substitutions:
+            if old not in text:
+                raise ValueError(f"{self.name}: the test's substitution {old!r} is not in the block")
+            text = text.replace(old, new)
+        return text if self.language == "python" else shorten_script(text)
+
+
+def blocks(page: str) -> list[Block]:
+    """Every ```sh and ```python block of a page (path from the repository root), with its markers."""
+    lines = (REPO / page).read_text().split("\n")
+    found = []
+    i = 0
+    while i < len(lines):
+        fence = FENCE.match(lines[i])
+        if not fence:
+            i += 1
+            continue
+        indent, language = fence.groups()
+        start = i
+        i += 1
+        body = []
+        while i < len(lines) and lines[i].strip() != "```":
+            body.append(lines[i][len(indent):] if lines[i].startswith(indent) else lines[i])
+            i += 1
+        i += 1
+        if language not in RUN_LANGUAGES:
+            continue
+        block = Block(page, start + 1, RUN_LANGUAGES[language], "\n".join(body) + "\n")
+        j = start - 1
+        while j >= 0 and (marker := MARKER.match(lines[j])):
+            kind, value = marker.groups()
+            if not value:
+                raise ValueError(f"{page}:{j + 1}: an empty <!-- {kind}: --> marker")
+            if kind == "not run":
+                block.not_run = value
+            elif kind == "test":
+                for pair in value.split(" ;; "):
+                    old, sep, new = pair.partition(" => ")
+                    if not sep:
+                        raise ValueError(f"{page}:{j + 1}: expected <!-- test: OLD => NEW -->")
+                    block.substitutions.append((old, new))
+            elif kind == "test before":
+                block.before.insert(0, value)
+            else:
+                block.prelude = value
+            j -= 1
+        found.append(block)
+    return found
+
+
+# --- shortening ---------------------------------------------------------------------------------
+
+#: How a command names the tool, stripped before the rules look at it.
+TOOL = re.compile(r"^(?:\.venv/bin/|venv/bin/|\./target/release/)?(snakesim|snake-cli)\s+(\S+)")
+
+
+def shorten_script(text: str) -> str:
+    """A shell block, command by command (a backslash-continued line is one command)."""
+    out = []
+    pending = ""
+    for line in text.split("\n"):
+        if line.rstrip().endswith("\\"):
+            pending += line.rstrip()[:-1] + " "
+            continue
+        out.append(shorten(pending + line))
+        pending = ""
+    return "\n".join(out)
+
+
+def shorten(command: str) -> str:
+    """The rules, each for one kind of long command, as text edits (brace expansions, globs and
+    variables stay the shell's). `--serve` runs until Ctrl-C: the runner's `serve_check` stops it once
+    it has printed its address. `--spawn` and `rerun FILE` open a native viewer, which needs a display:
+    the command is echoed, not run."""
+    body, comment = split_comment(command)
+    words = body.split()
+    if "--spawn" in words or (words and Path(words[0]).name == "rerun"):
+        return f"echo {shlex.quote('not run (needs a display): ' + body.strip())}"
+    if "--serve" in words:
+        return f"serve_check {body.strip()}{comment}"
+    tool = TOOL.match(body.strip())
+    if FULL or tool is None:
+        return command
+    kind = tool.group(2)
+    if kind == "bench":
+        body = with_flag(with_flag(body, "--repeats", "1"), "--steps", "240")
+    elif kind == "evaluate":
+        body = with_flag(body, "--episodes", "1")
+    elif kind == "replay":
+        body = with_flag(with_flag(body, "--episodes", "1", append=False), "--seconds", "2")
+    elif kind in ("train", "sweep", "search") and "--resume" not in words:
+        if kind == "sweep":
+            body = with_flag(body, "--seeds", "1", append=False)
+        if kind == "search":
+            body = with_flag(body, "--trials", "2", append=False)
+        body = tiny_training(body)
+    return body + comment
+
+
+def split_comment(command: str) -> tuple[str, str]:
+    """A command and its trailing `# comment` (the docs quote no `#`)."""
+    match = re.search(r"\s+#.*$", command)
+    return (command[: match.start()], command[match.start():]) if match else (command.rstrip(), "")
+
+
+def with_flag(body: str, flag: str, value: str, append: bool = True) -> str:
+    """Sets `flag` to `value` where the command gives it; else appends it (`append`) or leaves it."""
+    pattern = re.compile(rf"(\s){re.escape(flag)}(?:\s+|=)\S+")
+    if pattern.search(body):
+        return pattern.sub(rf"\g<1>{flag} {value}", body)
+    return f"{body} {flag} {value}" if append else body
+
+
+#: The flags and --set keys of a training's size, which tiny_training replaces.
+SIZE_FLAGS = re.compile(r"\s--(?:timesteps|n-envs|eval-freq|eval-episodes|checkpoint-freq)(?:\s+|=)\S+")
+SIZE_SETS = re.compile(r"\s--set(?:\s+|=)(?:" + "|".join(re.escape(k) for k in TINY_TRAINING) + r")=\S+")
+
+
+def tiny_training(body: str) -> str:
+    """Drops the command's own sizes and sets TINY_TRAINING's."""
+    body = SIZE_SETS.sub("", SIZE_FLAGS.sub("", body))
+    return body + "".join(f" --set {key}={value}" for key, value in TINY_TRAINING.items())
+
+
+# --- running ------------------------------------------------------------------------------------
+
+#: What a block may read, linked into its folder; what it writes (out/, runs/, sweeps/, docs/figures/)
+#: stays in the folder.
+LINKED = [".venv", "target", "models", "robots", "worlds", "experiments", "scripts", "tests", "snake-py",
+          "snake-core", "snake-rl", "snake-cli", "bullet-sys", "fuzz", "Cargo.toml", "Cargo.lock",
+          "requirements.lock", "requirements-test.lock", "README.md"]
+#: A block's time limit, seconds (a shortened block takes a few).
+TIMEOUT = None if FULL else 240
+#: At most this many blocks are not run; each says why.
+MOST_NOT_RUN = 16
+
+#: `--serve` runs until Ctrl-C: started, stopped once it has printed its address, which must come.
+SERVE_CHECK = r"""
+serve_check() {
+    setsid "$@" > serve.log 2>&1 &  # its own process group: the viewer's server goes with it
+    local pid=$!
+    for _ in $(seq 600); do
+        # A background command of a script ignores SIGINT: TERM stands for Ctrl-C.
+        if grep -q 'http://127.0.0.1' serve.log; then kill -TERM -- -$pid; wait $pid || true; return 0; fi
+        kill -0 $pid 2>/dev/null || break
+        sleep 0.1
+    done
+    kill -TERM -- -$pid 2>/dev/null; cat serve.log; echo "serve_check: no address from: $*"; return 1
+}
+"""
+
+
+def sandbox(tmp_path: Path) -> Path:
+    root = tmp_path / "repo"
+    root.mkdir()
+    for name in LINKED:
+        if (REPO / name).exists():
+            (root / name).symlink_to(REPO / name)
+    (root / "out").mkdir()  # scripts/setup's demo makes it
+    (root / "docs" / "figures").mkdir(parents=True)
+    return root
+
+
+def environment(root: Path) -> dict[str, str]:
+    env = dict(os.environ)
+    env["PATH"] = f"{root / '.venv' / 'bin'}:{root / 'target' / 'release'}:{env.get('PATH', '')}"
+    env.pop("VIRTUAL_ENV", None)
+    env["MPLBACKEND"] = "Agg"
+    env["PYTHONUNBUFFERED"] = "1"  # serve_check reads the address as it is printed
+    return env
+
+
+def run(block: Block, root: Path, text: str) -> None:
+    if block.language == "python":
+        code, arguments = text, []
+        if block.prelude:
+            prelude, *arguments = block.prelude.split()
+            code = (REPO / prelude).read_text() + "\n" + text
+        script = root / f"block-{block.line}.py"
+        script.write_text(code)
+        command = [str(root / ".venv" / "bin" / "python"), script.name, *arguments]
+    else:
+        script = root / f"block-{block.line}.sh"
+        script.write_text("set -eo pipefail\n" + SERVE_CHECK + text)
+        command = ["bash", script.name]
+    try:
+        done = subprocess.run(command, cwd=root, env=environment(root), capture_output=True, text=True,
+                              timeout=TIMEOUT)
+    except subprocess.TimeoutExpired as e:
+        pytest.fail(f"{block.name} ran over {TIMEOUT} s:\n{text}\n{e.stdout}\n{e.stderr}")
+    if done.returncode != 0:
+        pytest.fail(f"{block.name} failed (exit {done.returncode}):\n--- as run:\n{text}\n--- stdout:\n"
+                    f"{done.stdout[-3000:]}\n--- stderr:\n{done.stderr[-3000:]}")
+
+
+#: The pages of snake-py/tests/test_doc_examples_more.py (the rest: test_doc_examples.py), two files so
+#: that xdist (one file per worker) runs them on both cores; about half the time each.
+SECOND_HALF = ("docs/experiments.md", "docs/sweeps.md", "docs/deploy.md", "models/")
+
+
+def pages_with_examples(second_half: bool) -> list[str]:
+    return [p for p in PAGES if blocks(p) and p.startswith(SECOND_HALF) == second_half]
+
+
+def check_page(page: str, tmp_path: Path) -> None:
+    """Runs the page's blocks in order in one folder; fails on the first that fails, naming it."""
+    root = sandbox(tmp_path)
+    found = blocks(page)
+    ran = []
+    for block in found:
+        if block.not_run:
+            continue
+        for command in block.before:
+            run(Block(page, block.line, "sh", command + "\n"), root, shorten_script(command))
+        start = time.monotonic()
+        run(block, root, block.prepared())
+        print(f"{block.name}: {time.monotonic() - start:.1f} s")  # pytest -rP shows each block's time
+        ran.append(block.line)
+    assert ran == [b.line for b in found if not b.not_run]
