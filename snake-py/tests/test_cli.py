@@ -207,8 +207,16 @@ def test_plot_groups_seeds(small_run, tmp_path, capsys):
     )
     assert code == 0, err
     assert "PPO-small, 3 joints (paper), 2 runs" in out and "PPO-small, 4 joints (paper)" in out
-    with Image.open(fig) as image:
-        assert image.format == "PNG" and image.size == (1050, 675)
+    with Image.open(fig) as image:  # two panels by default: the return, and below it the success rate
+        assert image.format == "PNG" and image.size == (1050, 1050)
+    svg = tmp_path / "fig3.svg"
+    code, _, _ = run_cli(capsys, "plot", small_run, "--out", svg)
+    labels = ("mean evaluation return", "evaluation success rate")
+    panels = [t for t in labels if f"<!-- {t} -->" in svg.read_text()]
+    assert code == 0 and panels == ["mean evaluation return", "evaluation success rate"]
+    code, _, _ = run_cli(capsys, "plot", small_run, "--out", fig, "--metric", "mean_return")
+    with Image.open(fig) as image:  # one metric, one panel
+        assert code == 0 and image.size == (1050, 675)
     code, out, _ = run_cli(capsys, "plot", small_run, other_seed, "--out", fig, "--group", "none")
     assert code == 0 and out.count("PPO-small") == 2
     # Labels of one's own, one per line in the order drawn; a count that does not match is one line.

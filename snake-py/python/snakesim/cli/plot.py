@@ -43,7 +43,10 @@ def add_parser(sub) -> None:
     p.add_argument("--out", "--output", dest="out", required=True, help="the figure (.png, .pdf or .svg)")
     p.add_argument("--title", help="the figure's title")
     p.add_argument(
-        "--metric", choices=("mean_return", "success_rate", "mean_steps_to_goal"), default="mean_return"
+        "--metric",
+        choices=("auto", "mean_return", "success_rate", "mean_steps_to_goal"),
+        default="auto",
+        help="what to draw (default auto: the return above the success rate, a panel each)",
     )
     p.add_argument(
         "--group",

@@ -1,5 +1,6 @@
 """Learning curves (the paper's Figure 3): evaluation return against timesteps, one line per run or per
-group of runs that differ only in their seed (mean line, shaded spread)."""
+group of runs that differ only in their seed (mean line, shaded spread); by default a second panel
+below it, the success rate of the same evaluations."""
 
 from __future__ import annotations
 
@@ -24,6 +25,9 @@ TITLES = {
     "success_rate": "Evaluation success rate",
     "mean_steps_to_goal": "Mean steps to goal",
 }
+#: The default, ``auto``: what every run's evaluations log, return above success, one panel each.
+AUTO_METRICS = ("mean_return", "success_rate")
+AUTO_TITLE = "Evaluation return and success rate"
 # Keys that do not change what a run learns: runs equal but for these are seeds of one experiment.
 _NOT_THE_EXPERIMENT = ("seed", "eval_seed", "device", "torch_threads", "timesteps", "checkpoint_freq")
 
@@ -164,12 +168,26 @@ def aggregate(curves: Sequence[Curve], metric: str) -> tuple[np.ndarray, np.ndar
     return grid, stack.mean(axis=0), stack.min(axis=0), stack.max(axis=0)
 
 
+def _draw(ax: Any, label: str, members: Sequence[Curve], metric: str, spread: str) -> tuple[str, int]:
+    """One line (a group's mean, its spread shaded) on one panel; returns its label and run count."""
+    x, mean, low, high = aggregate(members, metric)
+    if len(members) > 1:
+        if spread == "std":
+            stack = np.vstack([np.interp(x, c.timesteps, c.values[metric]) for c in members])
+            low, high = mean - stack.std(axis=0), mean + stack.std(axis=0)
+        label = f"{label}, {len(members)} runs"
+    (line,) = ax.plot(x, mean, label=label, linewidth=1.6)
+    if len(members) > 1:
+        ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, linewidth=0)
+    return label, len(members)
+
+
 def plot_runs(
     sources: Sequence[str | os.PathLike],
     out: str | os.PathLike,
     *,
     title: str | None = None,
-    metric: str = "mean_return",
+    metric: str = "auto",
     group: str = "auto",
     spread: str = "minmax",
     x: str = "timesteps",
@@ -178,13 +196,15 @@ def plot_runs(
 ) -> list[tuple[str, int]]:
     """Draws the curves of ``sources`` (run directories, evaluations.csv files, sweep folders) into
     ``out`` (PNG, PDF or SVG by its suffix) against ``x`` (``timesteps`` or ``wall_time``, the run's
-    seconds of training); returns (label, runs) per line. ``labels`` name the lines in the order they
-    are drawn (one per line) instead of their configs."""
+    seconds of training); returns (label, runs) per line. ``metric`` ``auto`` draws AUTO_METRICS, a
+    panel each, on a shared x axis. ``labels`` name the lines in the order they are drawn (one per
+    line) instead of their configs."""
     if x not in X_AXES:
         raise PlotError(f"unknown x axis {x!r} (expected one of: {', '.join(X_AXES)})")
     axis = x
-    if metric not in METRICS:
-        raise PlotError(f"unknown metric {metric!r} (expected one of: {', '.join(METRICS)})")
+    if metric != "auto" and metric not in METRICS:
+        raise PlotError(f"unknown metric {metric!r} (expected auto or one of: {', '.join(METRICS)})")
+    metrics = AUTO_METRICS if metric == "auto" else (metric,)
     if spread not in ("minmax", "std"):
         raise PlotError(f"unknown spread {spread!r} (expected minmax or std)")
     curves = load_curves(sources)
@@ -204,28 +224,22 @@ def plot_runs(
         if any(not label or len(label) > MAX_LABEL for label in labels):
             raise PlotError(f"a label must have 1 to {MAX_LABEL} characters")
         groups = [(label, members) for label, (_, members) in zip(labels, groups)]
-    fig, ax = plt.subplots(figsize=(7.0, 4.5))
+    fig, axes = plt.subplots(len(metrics), 1, sharex=True, figsize=(7.0, 4.5 + 2.5 * (len(metrics) - 1)),
+                             squeeze=False)
     drawn = []
     try:
-        for label, members in groups:
-            x, mean, low, high = aggregate(members, metric)
-            if len(members) > 1:
-                if spread == "std":
-                    stack = np.vstack([np.interp(x, c.timesteps, c.values[metric]) for c in members])
-                    low, high = mean - stack.std(axis=0), mean + stack.std(axis=0)
-                label = f"{label}, {len(members)} runs"
-            (line,) = ax.plot(x, mean, label=label, linewidth=1.6)
-            if len(members) > 1:
-                ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, linewidth=0)
-            drawn.append((label, len(members)))
+        for panel, (ax,) in zip(metrics, axes):
+            drawn = [_draw(ax, label, members, panel, spread) for label, members in groups]
+            ax.set_ylabel(METRICS[panel])
+            ax.grid(True, alpha=0.3)
+            if panel == "success_rate":
+                ax.set_ylim(-0.02, 1.02)
+        ax = axes[-1][0]
         ax.set_xlabel(X_AXES[axis])
-        ax.set_ylabel(METRICS[metric])
-        ax.set_title(title if title is not None else TITLES[metric])
-        ax.grid(True, alpha=0.3)
         ax.ticklabel_format(axis="x", style="sci", scilimits=(0, 3))
-        if metric == "success_rate":
-            ax.set_ylim(-0.02, 1.02)
-        ax.legend(fontsize="small", loc="best")
+        default_title = AUTO_TITLE if metric == "auto" else TITLES[metric]
+        axes[0][0].set_title(title if title is not None else default_title)
+        axes[0][0].legend(fontsize="small", loc="best")
         fig.tight_layout()
         fig.savefig(out, dpi=dpi)
     finally:
