@@ -8,6 +8,10 @@
 //! one row of targets before each physics step and records the base pose and the joint angles after
 //! it: the columns of `snake-cli run --output`.
 
+mod fitted_file;
+
+pub use fitted_file::fitted_robot_file;
+
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 

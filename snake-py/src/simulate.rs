@@ -125,6 +125,16 @@ fn simulate_robot<'py>(
     Ok((base, q))
 }
 
+/// fitted_robot_file(robot_path, overrides_json, urdf) -> str: the robot (a robot file or a URDF) with
+/// the fit keys of `overrides_json` written in, as the YAML text of a robot file whose `urdf:` is
+/// `urdf` (snake-core's `run_targets::fitted_robot_file`: the mapping `simulate_robot` applies, every
+/// per-link and per-joint value included; keys a robot file cannot hold as comments).
+#[pyfunction]
+fn fitted_robot_file(robot_path: PathBuf, overrides_json: &str, urdf: &str) -> PyResult<String> {
+    let overrides = Overrides::from_json(overrides_json).map_err(to_py)?;
+    snake_core::run_targets::fitted_robot_file(&robot_path, &overrides, urdf).map_err(to_py)
+}
+
 /// snake-cli run's footprint of a robot over which a world's ground lifts the default start.
 fn reach(spec: &RobotSpec) -> f64 {
     use snake_core::urdf::Geometry;
@@ -200,9 +210,10 @@ fn world_files(world_path: PathBuf) -> PyResult<Vec<OsString>> {
     ))
 }
 
-/// Adds `simulate_robot`, `robot_joint_names`, `robot_files` and `world_files` to the module.
+/// Adds `simulate_robot`, `fitted_robot_file`, `robot_joint_names`, `robot_files` and `world_files` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate_robot, m)?)?;
+    m.add_function(wrap_pyfunction!(fitted_robot_file, m)?)?;
     m.add_function(wrap_pyfunction!(robot_joint_names, m)?)?;
     m.add_function(wrap_pyfunction!(robot_files, m)?)?;
     m.add_function(wrap_pyfunction!(world_files, m)?)
