@@ -128,12 +128,17 @@ impl PathPlot {
                 .draw()
                 .map_err(|e| err(&e))?;
         }
-        chart
+        let path_series = chart
             .draw_series(LineSeries::new(
                 self.trace.iter().copied(),
                 BLUE.mix(0.6).stroke_width(2),
             ))
             .map_err(|e| err(&e))?;
+        if text {
+            path_series.label("head's path").legend(|(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], BLUE.mix(0.6).stroke_width(2))
+            });
+        }
 
         let n = self.snapshots.len().max(2) as f64;
         for (k, (t, poses)) in self.snapshots.iter().enumerate() {
@@ -146,12 +151,23 @@ impl PathPlot {
                     BLACK.mix(shade * 0.8)
                 };
                 let corners = square(pose, h);
-                chart
+                let cube = chart
                     .draw_series(std::iter::once(Polygon::new(
                         corners.clone(),
                         colour.mix(0.35).filled(),
                     )))
                     .map_err(|e| err(&e))?;
+                // The legend names the last moment's head and one body cube (earlier ones are paler).
+                if text && k + 1 == self.snapshots.len() && i <= 1 {
+                    let (label, swatch) = if i == 0 {
+                        ("head (its time beside it)", RED.mix(0.5))
+                    } else {
+                        ("body, pale early to dark late", BLACK.mix(0.4))
+                    };
+                    cube.label(label).legend(move |(x, y)| {
+                        Rectangle::new([(x + 3, y - 5), (x + 13, y + 5)], swatch.filled())
+                    });
+                }
                 let mut outline = corners;
                 outline.push(outline[0]);
                 chart
@@ -171,6 +187,16 @@ impl PathPlot {
                     )))
                     .map_err(|e| err(&e))?;
             }
+        }
+        if text {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK.mix(0.4))
+                .label_font(("sans-serif", 14))
+                .draw()
+                .map_err(|e| err(&e))?;
         }
         root.present().map_err(|e| err(&e))?;
         drop(chart);
