@@ -34,6 +34,7 @@ use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, GaitKind, JointRoles, LateralUndulation, Serpenoid};
 use crate::limits::{short, MAX_MOTOR_VELOCITY, MAX_URDF_BYTES};
 use crate::math::StartPose;
+use crate::media::water::{Coefficients, CoefficientsFile};
 use crate::media::{MediaState, Primitive};
 use crate::recorded::{FileOrRecord, Reader, RecordedFiles};
 use crate::skin::{SkinAxis, SkinFriction};
@@ -94,6 +95,9 @@ pub struct LinkSettings {
     /// Skin friction of this link (overrides the robot's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub skin_friction: Option<SkinFriction>,
+    /// Water's coefficients for this link (each key over the robot's `water`, then the water's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water: Option<CoefficientsFile>,
 }
 
 /// A robot file: a small YAML around a URDF. Every key but `urdf` may be left out.
@@ -106,9 +110,10 @@ pub struct LinkSettings {
 ///                                  # prismatic joint): setJointMotorControl2's maxVelocity, no limit if absent
 /// anisotropic_friction: [1, 0.01, 0.01]   # every link, in its own frame
 /// skin_friction: {forward: 0.1, backward: 0.15, transverse: 0.2, axis: x}   # every link (issue 27)
+/// water: {drag: 1.2, added_mass: 1.0}   # water's coefficients, every link, over the water's (issue 60)
 /// links:                           # per link, by URDF name
 ///   head: {anisotropic_friction: [1, 1, 1]}
-///   tail: {skin_friction: {forward: 0.1, backward: 0.1, transverse: 0.1}}
+///   tail: {skin_friction: {forward: 0.1, backward: 0.1, transverse: 0.1}, water: {drag: 2.5}}
 /// joints:                          # per movable joint, by URDF name
 ///   neck: {max_velocity: 3.0}      # overrides motors: max_velocity for this joint
 /// gait: {segment_length: 0.0635, wave_length: 0.5, amplitude: 0.6}   # the sine gait's wave
@@ -135,6 +140,10 @@ pub struct RobotFile {
     /// lateral and anisotropic friction; its axis defaults to x.
     #[serde(default)]
     pub skin_friction: Option<SkinFriction>,
+    /// Water's coefficients for every link (`skin_friction`, `drag`, `added_mass`, `added_inertia`,
+    /// `linear`), over those of the water it swims in (docs/media.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water: Option<CoefficientsFile>,
     /// Per-link settings by URDF link name.
     #[serde(default)]
     pub links: BTreeMap<String, LinkSettings>,
@@ -232,6 +241,9 @@ pub struct RobotSpec {
     pub anisotropic_friction: Vec<Option<[f64; 3]>>,
     /// Skin friction per link in pybullet's order (index 0: the root); `None` keeps Bullet's friction.
     pub skin_friction: Vec<Option<SkinFriction>>,
+    /// Water's coefficients per link in pybullet's order (index 0: the root), checked; `None` takes
+    /// the water's.
+    pub water: Vec<Option<CoefficientsFile>>,
     /// The start pose the robot file names, if any.
     pub start: Option<StartPose>,
     /// The file it was read from.
@@ -316,6 +328,7 @@ impl RobotSpec {
             max_velocities: vec![None; movable],
             anisotropic_friction: vec![None; n],
             skin_friction: vec![None; n],
+            water: vec![None; n],
             start: None,
             source: path.to_path_buf(),
             gait: None,
@@ -353,6 +366,10 @@ impl RobotSpec {
         if let Some(s) = &file.skin_friction {
             s.validate(&format!("{shown}: skin_friction"))?;
         }
+        if let Some(w) = &file.water {
+            w.over(Coefficients::default(), &format!("{shown}: water"))?;
+        }
+        let mut water = vec![file.water; urdf.links.len()];
         for (name, settings) in &file.links {
             let k = urdf
                 .links
@@ -371,6 +388,13 @@ impl RobotSpec {
             if let Some(s) = &settings.skin_friction {
                 s.validate(&format!("{shown}: links: {name}: skin_friction"))?;
                 skin[k] = Some(*s);
+            }
+            if let Some(w) = &settings.water {
+                w.over(
+                    Coefficients::default(),
+                    &format!("{shown}: links: {name}: water"),
+                )?;
+                water[k] = Some(file.water.map_or(*w, |base| w.merged_over(&base)));
             }
         }
         if let Some(g) = &file.gait {
@@ -399,6 +423,7 @@ impl RobotSpec {
             max_velocities,
             anisotropic_friction: friction,
             skin_friction: skin,
+            water,
             start,
             source: path.to_path_buf(),
             gait: file.gait,
@@ -670,7 +695,10 @@ impl Robot {
                     .collect()
             })
             .collect();
-        let media = MediaState::for_body(&ground.media, &world, body, &shapes)?;
+        let mut media = MediaState::for_body(&ground.media, &world, body, &shapes)?;
+        if let Some(m) = &mut media {
+            m.set_water_coefficients(&spec.water);
+        }
         Ok(Robot {
             media,
             world,

@@ -145,6 +145,8 @@ pub struct LinkGeometry {
     pub shapes: Vec<Shape>,
     /// The surface elements of every shape (empty when no medium asks for them).
     pub elements: Vec<Element>,
+    /// Water's coefficients for this link as its robot file gives them (checked), over the water's.
+    pub water: Option<crate::media::water::CoefficientsFile>,
 }
 
 impl LinkGeometry {
@@ -175,6 +177,7 @@ impl LinkGeometry {
             mass,
             shapes,
             elements,
+            water: None,
         })
     }
 

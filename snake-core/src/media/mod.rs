@@ -186,6 +186,13 @@ impl MediaState {
         Self::new(media, links, world.time_step())
     }
 
+    /// Sets each link's water coefficients (a robot file's `water` keys, checked; the base first).
+    pub fn set_water_coefficients(&mut self, per_link: &[Option<water::CoefficientsFile>]) {
+        for (link, c) in self.links.iter_mut().zip(per_link) {
+            link.water = *c;
+        }
+    }
+
     /// The links' geometry, the base first.
     pub fn links(&self) -> &[LinkGeometry] {
         &self.links

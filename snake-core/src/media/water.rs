@@ -111,6 +111,29 @@ pub struct CoefficientsFile {
 }
 
 impl CoefficientsFile {
+    /// These values over `base`, already checked ([`CoefficientsFile::over`] checked them when the
+    /// file was read).
+    pub fn apply(&self, base: Coefficients) -> Coefficients {
+        Coefficients {
+            skin_friction: self.skin_friction.unwrap_or(base.skin_friction),
+            drag: self.drag.unwrap_or(base.drag),
+            added_mass: self.added_mass.unwrap_or(base.added_mass),
+            added_inertia: self.added_inertia.unwrap_or(base.added_inertia),
+            linear: self.linear.unwrap_or(base.linear),
+        }
+    }
+
+    /// `self`'s keys over `base`'s (a link's over its robot's).
+    pub fn merged_over(&self, base: &CoefficientsFile) -> CoefficientsFile {
+        CoefficientsFile {
+            skin_friction: self.skin_friction.or(base.skin_friction),
+            drag: self.drag.or(base.drag),
+            added_mass: self.added_mass.or(base.added_mass),
+            added_inertia: self.added_inertia.or(base.added_inertia),
+            linear: self.linear.or(base.linear),
+        }
+    }
+
     /// These values over `base`, each checked: finite, >= 0 and at most
     /// [`crate::limits::MAX_HYDRO_COEFFICIENT`]; `what` names the key in messages.
     pub fn over(&self, base: Coefficients, what: &str) -> Result<Coefficients> {
@@ -639,7 +662,8 @@ impl Water {
             solids.clone(),
             link.mass,
             self.density,
-            self.coefficients,
+            link.water
+                .map_or(self.coefficients, |c| c.apply(self.coefficients)),
             "link",
         ) else {
             return crate::media::Wrench::default();

@@ -1,0 +1,103 @@
+//! Water in robot files and worlds (issue 60): a robot file's `water` keys reach each link (a link's
+//! over the robot's, the robot's over the water's), bad values are one line naming the file and key,
+//! and a robot floats where Archimedes puts it.
+
+use std::path::PathBuf;
+
+use snake_core::media::water::CoefficientsFile;
+use snake_core::{Robot, RobotSpec, Simulation, StartPose, WorldRef};
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn robot_file(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("snakesim-water-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let urdf = repo().join("robots/mamba-10.urdf");
+    std::fs::copy(&urdf, dir.join("mamba-10.urdf")).unwrap();
+    let path = dir.join("robot.yaml");
+    std::fs::write(&path, format!("urdf: mamba-10.urdf\n{text}")).unwrap();
+    path
+}
+
+#[test]
+fn a_links_water_keys_go_over_the_robots() {
+    let path = robot_file(
+        "keys",
+        "water: {drag: 1.5, linear: 0.5}\nlinks:\n  link9: {water: {drag: 3.0, added_mass: 0.5}}\n",
+    );
+    let spec = RobotSpec::load(&path).unwrap();
+    let robot = CoefficientsFile {
+        drag: Some(1.5),
+        linear: Some(0.5),
+        ..Default::default()
+    };
+    assert_eq!(spec.water[0], Some(robot));
+    assert_eq!(
+        spec.water[9],
+        Some(CoefficientsFile {
+            drag: Some(3.0),
+            added_mass: Some(0.5),
+            linear: Some(0.5),
+            ..Default::default()
+        })
+    );
+}
+
+#[test]
+fn bad_water_keys_are_one_line_naming_file_and_key() {
+    let path = robot_file("negative", "links:\n  link3: {water: {drag: -1}}\n");
+    let e = RobotSpec::load(&path).unwrap_err().to_string();
+    assert!(e.contains("robot.yaml: links: link3: water: drag"), "{e}");
+    assert!(!e.contains('\n'), "{e}");
+    let path = robot_file("unknown", "water: {cd: 1}\n");
+    let e = RobotSpec::load(&path).unwrap_err().to_string();
+    assert!(e.contains("robot.yaml") && e.contains("cd"), "{e}");
+    let path = robot_file("nan", "water: {added_mass: .nan}\n");
+    let e = RobotSpec::load(&path).unwrap_err().to_string();
+    assert!(e.contains("water") && e.contains("added_mass"), "{e}");
+}
+
+/// mamba-10 held straight floats with its links' weight equal to the water they displace: 1 kg per
+/// link of 998.2 kg/m^3 water is 1.00180 litres of the 1.14511 a link has, 87.49 %: a horizontal
+/// cylinder that deep (the circular segment) has its axis 2.85 cm under the surface.
+#[test]
+fn mamba_floats_at_the_draft_archimedes_gives() {
+    let spec = RobotSpec::load(&repo().join("robots/mamba-10.yaml")).unwrap();
+    let pool = WorldRef::load(&repo().join("worlds/pool.yaml")).unwrap();
+    let start = StartPose {
+        z: 0.98,
+        ..spec.default_start()
+    };
+    let mut robot = Robot::in_world(&spec, start, pool.spec()).unwrap();
+    robot.set_targets(&[0.0; 9]).unwrap();
+    for _ in 0..2400 {
+        robot.step().unwrap();
+    }
+    let z = robot.base_state().unwrap().pose.position.z;
+    // The submerged fraction f of a circle whose centre lies d under the surface: solve for d.
+    let (r, f) = (
+        0.045f64,
+        1.0 / (998.2 * std::f64::consts::PI * 0.045 * 0.045 * 0.18),
+    );
+    let segment = |d: f64| {
+        let h = (r + d) / (2.0 * r);
+        let theta = 2.0 * (1.0 - 2.0 * h).acos();
+        (theta - theta.sin()) / std::f64::consts::TAU
+    };
+    let (mut lo, mut hi) = (-r, r);
+    for _ in 0..60 {
+        let mid = (lo + hi) / 2.0;
+        if segment(mid) < f {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let depth = 1.0 - z;
+    assert!(
+        (depth - lo).abs() < 1e-4,
+        "axis {depth} m under, Archimedes {lo} m"
+    );
+}
