@@ -6,6 +6,7 @@ mod env_run;
 mod flags;
 mod output;
 mod plot;
+mod probe;
 mod python;
 mod recording;
 mod run;
@@ -40,6 +41,9 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Train PPO with the native trainer (the paper's settings by default); no Python needed.
     Train(train::TrainArgs),
+    /// Li et al.'s plate experiment in a world's granular medium: the force on a thin plate at an
+    /// angle, depth and speed, beside the law integrated over it.
+    Probe(probe::ProbeArgs),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +58,7 @@ fn main() -> ExitCode {
         Command::Atlas(args) => atlas::atlas(&args).map(|()| ExitCode::SUCCESS),
         Command::Env(args) => env_run::run(&args).map(|()| ExitCode::SUCCESS),
         Command::Bench(args) => bench::bench(&args).map(|()| ExitCode::SUCCESS),
+        Command::Probe(args) => probe::probe(&args).map(|()| ExitCode::SUCCESS),
         Command::Train(args) => train::run(
             &args,
             matches

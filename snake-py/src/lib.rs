@@ -14,6 +14,7 @@ mod controllers;
 mod evaluation;
 mod inputs;
 mod lock;
+mod media;
 mod native;
 mod simulate;
 mod swim;
@@ -512,6 +513,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     inputs::register(m)?;
     lock::register(m)?;
     simulate::register(m)?;
+    media::register(m)?;
     swim::register(m)?;
     Ok(())
 }

@@ -10,7 +10,7 @@ import snakesim
 PACKAGE = Path(snakesim.__file__).parent
 CONCERNS = ("envs", "runs", "agents", "sweeps", "viewer", "cli")
 #: The package's top-level modules: the public face and leaves every concern may use.
-TOP_LEVEL = {"__init__", "__main__", "extras", "files", "limits", "wrappers"}
+TOP_LEVEL = {"__init__", "__main__", "extras", "files", "limits", "media", "wrappers"}
 
 
 def module_name(path: Path) -> str:

@@ -338,7 +338,12 @@ pub fn element_stress(
     }
     let (nr, dz) = (n.dot(&r), d.z);
     let p = dr.hypot(dz);
-    if p > 1e-12 && np > 1e-12 && dr * nr + dz * nz > 0.0 {
+    // The leading face: moving into it. A plate moving exactly along itself (Li's beta = -gamma) has
+    // no leading face; its lower face takes the law there (both faces give the same alpha, which
+    // has period pi in beta, so the law stays continuous through the switch).
+    let into = dr * nr + dz * nz;
+    let leads = into > 0.0 || (into == 0.0 && (nz < 0.0 || (nz == 0.0 && nr > 0.0)));
+    if p > 1e-12 && np > 1e-12 && leads {
         let (sb, cb) = (nr / np, -nz / np);
         let (c2b, s2b) = (cb * cb - sb * sb, 2.0 * sb * cb);
         let (ax, az) = c.alpha_cs(c2b, s2b, dr / p, -dz / p);

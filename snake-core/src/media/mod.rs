@@ -13,6 +13,7 @@
 pub mod geometry;
 pub mod granular;
 pub mod ground;
+pub mod probe;
 pub mod region;
 pub mod water;
 

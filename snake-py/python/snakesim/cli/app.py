@@ -23,7 +23,7 @@ import sys
 import tempfile
 import threading
 
-from snakesim.cli import calibrate, evaluate, export, plot, replay, search, sweep, train, view
+from snakesim.cli import calibrate, evaluate, export, plot, replay, search, sweep, train, validate, view
 from snakesim.cli.args import Parser
 from snakesim.cli.errors import UserError, report
 
@@ -34,7 +34,7 @@ def build_parser() -> Parser:
         description="Train, evaluate, plot and replay PPO agents of the 'Simulating Snakes' snake.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=Parser)
-    for command in (train, evaluate, plot, sweep, search, replay, export, view, calibrate):
+    for command in (train, evaluate, plot, sweep, search, replay, export, view, calibrate, validate):
         command.add_parser(sub)
     return parser
 
