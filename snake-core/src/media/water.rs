@@ -202,6 +202,10 @@ pub struct Water {
     /// Gravity, m/s^2, world frame: standard gravity until the body that swims in it sets its
     /// world's ([`Water::set_gravity`]).
     pub gravity: Vector3<f64>,
+    /// Scale of the added mass's relaxation gain (1: the gain that makes the loop dead-beat; stable
+    /// below 2). Not a file key: it is there for the study that shows steady swimming does not
+    /// depend on it (tests/water.rs, docs/media.md).
+    pub relaxation: f64,
 }
 
 impl WaterFile {
@@ -237,6 +241,7 @@ impl WaterFile {
             current: Vector3::from(current),
             coefficients,
             gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),
+            relaxation: 1.0,
         })
     }
 }
@@ -747,7 +752,7 @@ impl Water {
             if dt > 0.0 {
                 let mass = hydro.mass.max(f64::MIN_POSITIVE);
                 let ratio = hydro.mu_n[0].max(hydro.mu_n[1]) / mass;
-                let k = 1.0 / (1.0 + ratio);
+                let k = self.relaxation / (1.0 + ratio);
                 memory.accel += ((state.linear - v0) / dt - memory.accel) * k;
                 memory.angular_accel += ((state.angular - w0) / dt - memory.angular_accel) * k;
             }
