@@ -1,7 +1,7 @@
-"""Progress where a person waits (evaluate, calibrate, sweep): a bar on a terminal, one plain line per
-step of progress on stderr when piped, nothing on stdout beside ``--json -``'s JSON; progress changes
-no result. Also: ``import snakesim`` reaches the documented subpackages, and ``evaluate`` says which
-robot ran."""
+"""Progress where a person waits (evaluate, calibrate, sweep, export of an SB3 zip): a bar on a
+terminal, one plain line per step of progress on stderr when piped, nothing on stdout beside
+``--json -``'s JSON; progress changes no result. Also: ``import snakesim`` reaches the documented
+subpackages, and ``evaluate`` says which robot ran."""
 
 import io
 import json
@@ -69,6 +69,24 @@ def test_evaluate_piped_prints_a_line_per_episode_and_json_alone_on_stdout():
     quiet = run("evaluate", "baseline:steer", "--joints", 5, "--episodes", 3, "--json", "-", "--no-progress")
     assert quiet.returncode == 0 and quiet.stderr == ""
     assert json.loads(quiet.stdout)["per_episode"] == report["per_episode"]
+
+
+def test_export_of_an_sb3_zip_shows_its_steps_and_a_native_model_none(tmp_path):
+    # An SB3 zip (snakesim's own export of a native model) loads through SB3 and torch: seconds.
+    native_model = REPO / "models" / "goal-5.safetensors"
+    assert run("export", native_model, "--sb3", tmp_path / "goal-5.zip").returncode == 0
+    done = run("export", tmp_path / "goal-5.zip", "--onnx", tmp_path / "goal-5.onnx")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith(f"wrote {tmp_path / 'goal-5.onnx'} ") and len(done.stdout.splitlines()) == 1
+    lines = done.stderr.splitlines()
+    assert [line.split(",")[0] for line in lines] == ["export: 1/2 steps", "export: 2/2 steps"], lines
+    assert lines[0].endswith(f"loaded {tmp_path / 'goal-5.zip'}")
+    assert lines[1].endswith("built the ONNX graph")
+    assert "left" not in done.stderr  # no estimate: the load is nearly all of the time
+    native = run("export", native_model, "--onnx", tmp_path / "native.onnx")
+    assert native.returncode == 0 and native.stderr == ""
+    shown = run("export", native_model, "--onnx", tmp_path / "n2.onnx", "--progress")
+    assert shown.returncode == 0 and "export: 100%" in shown.stderr
 
 
 def test_progress_changes_no_episode():

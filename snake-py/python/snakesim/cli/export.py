@@ -6,8 +6,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from snakesim.cli.args import agent_options, load_agent
+from snakesim.cli.args import agent_options, load_agent, progress_options
 from snakesim.cli.errors import UserError, check_writable
+from snakesim.runs.progress import Progress
 
 
 def _output(path: str, flag: str, suffix: str) -> Path:
@@ -17,10 +18,18 @@ def _output(path: str, flag: str, suffix: str) -> Path:
     return out
 
 
+def _loads_sb3(source: str) -> bool:
+    """Whether the source is an SB3 zip (or a run directory holding one): loading it takes SB3 and torch,
+    6-9 s on the 2-core machine (measured 2026-11-29: `snakesim export RUN/model.zip --onnx` 8.5 s,
+    SB3's own policy and optimizer construction most of it); a native model's whole export takes about
+    1 s."""
+    path = Path(source)
+    return path.suffix.lower() == ".zip" or (path / "model.zip").is_file()
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     from snakesim.agents.loading import BASELINE_PREFIX
-    from snakesim.runs.export import to_sb3, vecnormalize_path
-    from snakesim.runs.onnx import INPUT, OUTPUT, ExportError, to_onnx_bytes, write_bytes
+    from snakesim.runs.export import vecnormalize_path
 
     if args.sb3 is None and args.onnx is None:
         raise UserError("give --onnx POLICY.onnx, --sb3 MODEL.zip or both")
@@ -35,12 +44,27 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.onnx is not None:
         onnx = _output(args.onnx, "--onnx", ".onnx")
         outputs.append((onnx, "--onnx"))
+    # Progress where export is slow (an SB3 zip), as evaluate's: a bar on a terminal, a line per step
+    # when piped, on stderr; steps: loading, then each output.
+    steps = 1 + (onnx is not None) + (sb3 is not None)
+    show = args.progress if args.progress is not None or _loads_sb3(args.source) else False
+    with Progress(steps, "steps", "export", show, estimate=False) as progress:
+        return _export(args, outputs, sb3, onnx, progress)
+
+
+def _export(
+    args: argparse.Namespace, outputs, sb3: Path | None, onnx: Path | None, progress: Progress
+) -> int:
+    from snakesim.runs.export import to_sb3
+    from snakesim.runs.onnx import INPUT, OUTPUT, ExportError, to_onnx_bytes, write_bytes
+
     agent = load_agent(args, outputs)
     if sb3 is not None and not agent.exports_sb3:
         raise UserError(
             f"{agent.path} is already a Stable-Baselines3 model; --sb3 takes native runs and models "
             "(--onnx takes both)"
         )
+    progress.update(1, f"loaded {args.source}")
     # The graph is built (and checked) before anything is written.
     graph = None
     if onnx is not None:
@@ -48,6 +72,7 @@ def cmd_export(args: argparse.Namespace) -> int:
             graph = to_onnx_bytes(agent)
         except (ExportError, ImportError) as error:
             raise UserError(str(error)) from None
+        progress.update(progress.done + 1, "built the ONNX graph")
     if sb3 is not None:
         try:
             written = to_sb3(agent, sb3)
@@ -55,6 +80,7 @@ def cmd_export(args: argparse.Namespace) -> int:
             raise UserError(f"cannot write --sb3 {sb3}: {error.strerror or error}") from None
         except ValueError as error:
             raise UserError(str(error)) from None
+        progress.update(progress.done + 1, "wrote the SB3 zip")
         files = ", ".join(map(str, written))
         print(f"wrote {files} (PPO-{agent.arch}, {agent.joints} joints; load with PPO.load)")
     if onnx is not None and graph is not None:
@@ -82,4 +108,5 @@ def add_parser(sub) -> None:
     agent_options(p)
     p.add_argument("--sb3", metavar="MODEL.zip", help="the SB3 zip to write (native models only)")
     p.add_argument("--onnx", metavar="POLICY.onnx", help="the ONNX graph to write")
+    progress_options(p, "step (by default for an SB3 zip, whose loading takes seconds; a native model: 1 s)")
     p.set_defaults(func=cmd_export)

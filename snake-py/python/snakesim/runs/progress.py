@@ -1,4 +1,5 @@
-"""Progress for a person waiting on a command (``snakesim evaluate``, ``calibrate``, ``sweep``): on
+"""Progress for a person waiting on a command (``snakesim evaluate``, ``calibrate``, ``sweep``,
+``export`` of an SB3 zip): on
 a terminal, a bar on stderr with the total, the rate and an estimate of the time left (tqdm); when
 stderr is not a terminal (piped, a log file), one plain line per step of progress; nothing on stdout,
 so that ``--json -`` prints JSON alone."""
@@ -29,9 +30,17 @@ class Progress:
     or call :meth:`close`."""
 
     def __init__(
-        self, total: int, unit: str, label: str, show: bool | None = None, stream: TextIO | None = None
+        self,
+        total: int,
+        unit: str,
+        label: str,
+        show: bool | None = None,
+        stream: TextIO | None = None,
+        estimate: bool = True,
     ) -> None:
         self.total = int(total)
+        # False where steps differ too much for a linear estimate of the time left (export's load).
+        self.estimate = estimate
         self.unit = unit
         self.label = label
         self.stream = sys.stderr if stream is None else stream
@@ -43,8 +52,16 @@ class Progress:
         if self.mode == "bar":
             from tqdm import tqdm
 
+            no_estimate = "{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}{postfix}]"
+            shape = {} if estimate else {"bar_format": no_estimate}
             self.bar = tqdm(
-                total=self.total, unit=unit, desc=label, dynamic_ncols=True, file=self.stream, mininterval=0.5
+                total=self.total,
+                unit=unit,
+                desc=label,
+                dynamic_ncols=True,
+                file=self.stream,
+                mininterval=0.5,
+                **shape,
             )
 
     def update(self, done: int, note: str | None = None) -> None:
@@ -61,7 +78,7 @@ class Progress:
     def line(self, done: int, elapsed: float, note: str | None = None) -> str:
         """The plain line of ``done`` after ``elapsed`` seconds."""
         text = f"{self.label}: {done}/{self.total} {self.unit}, {clock(elapsed)} elapsed"
-        if 0 < done < self.total:
+        if self.estimate and 0 < done < self.total:
             text += f", about {clock(elapsed * (self.total - done) / done)} left"
         return text if note is None else f"{text}, {note}"
 
