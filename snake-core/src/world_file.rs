@@ -873,6 +873,7 @@ impl WorldFile {
                  the ground gives way inside its area"
             )));
         }
+        crate::media::water::check_overlap(&media).map_err(e)?;
         Ok(WorldSpec {
             ground,
             ground_friction: self.ground_friction,

@@ -300,6 +300,31 @@ impl Solid {
     }
 }
 
+/// Refuses two water entries whose regions overlap (a link in both would float twice as high): a
+/// current that differs by place is written as regions side by side. Names both entries.
+pub fn check_overlap(media: &[crate::media::Medium]) -> Result<()> {
+    let waters: Vec<(usize, &Region)> = media
+        .iter()
+        .enumerate()
+        .filter_map(|(k, m)| match m {
+            crate::media::Medium::Water(w) => Some((k, &w.region)),
+            _ => None,
+        })
+        .collect();
+    for (i, &(a, ra)) in waters.iter().enumerate() {
+        for &(b, rb) in &waters[i + 1..] {
+            let apart = (0..3).any(|d| ra.max[d] <= rb.min[d] || rb.max[d] <= ra.min[d]);
+            if !apart {
+                return Err(invalid(format!(
+                    "media[{a}] and media[{b}]: two water regions overlap; give each place one water \
+                     entry (regions side by side, each with its current)"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Refuses links without volume (no box, cylinder, capsule or sphere collision shape) in a world with
 /// water, naming the first (links are numbered as pybullet's, -1 the base).
 pub fn check_volumes(links: &[crate::media::geometry::LinkGeometry]) -> Result<()> {
@@ -1044,6 +1069,28 @@ mod tests {
             (last_a - push / (2.0 * mass)).abs() < 1e-9 * last_a,
             "{last_a}"
         );
+    }
+
+    #[test]
+    fn overlapping_water_regions_are_refused() {
+        let at = |x0: f64| {
+            crate::media::Medium::Water(
+                WaterFile {
+                    area: [x0, 0.0, x0 + 1.0, 1.0],
+                    surface: 0.0,
+                    depth: 1.0,
+                    density: None,
+                    current: None,
+                    coefficients: None,
+                }
+                .resolve("m")
+                .unwrap(),
+            )
+        };
+        // Side by side (sharing an edge): fine; overlapping: refused, both named.
+        assert!(check_overlap(&[at(0.0), at(1.0)]).is_ok());
+        let e = check_overlap(&[at(0.0), at(0.5)]).unwrap_err().to_string();
+        assert!(e.contains("media[0] and media[1]"), "{e}");
     }
 
     #[test]
