@@ -390,8 +390,14 @@ impl Granular {
             } else if len == 0.0 {
                 continue;
             }
-            let len = u.norm();
-            let d = *u / len;
+            // The displacement one step on (u + v dt): the spring's look-ahead, a damper of time
+            // constant dt in the elastic range, which keeps a resting body from chattering.
+            let q = *u + v * dt;
+            let len = q.norm();
+            if len == 0.0 {
+                continue;
+            }
+            let d = q / len;
             let n = rot * el.normal;
             let ramp = (len / self.elastic).min(1.0);
             let f = ramp
