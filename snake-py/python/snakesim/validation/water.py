@@ -106,7 +106,7 @@ def floating_box() -> Result:
     published = 2 * 2.0 / (RHO * 0.4 * 0.2)
     draft = 1.0 - (base[-240:, 2].mean() - 0.05)
     return _result(
-        "archimedes-floating-box",
+        "water.archimedes-floating-box",
         "draft of a floating box, m (0.4 x 0.2 x 0.1 m, 4 kg)",
         published,
         "m",
@@ -126,7 +126,7 @@ def neutral_body() -> Result:
         base = _run(robot, _pool(folder, 1.0, 1.0, (0, 0, 0)), 10.0)
     moved = float(np.linalg.norm(base[-1, :3] - base[0, :3]))
     return Result(
-        "archimedes-neutral",
+        "water.archimedes-neutral",
         "drift of a neutrally buoyant body in 10 s, m",
         0.0,
         "m",
@@ -147,7 +147,7 @@ def current() -> Result:
         base = _run(robot, _pool(folder, 1.0, 1.0, (0.2, 0, 0)), 30.0)
     speed = (base[-1, 0] - base[-241, 0]) / (240 * DT)
     return _result(
-        "archimedes-current",
+        "water.archimedes-current",
         "speed of a passive body in a 0.2 m/s current, m/s",
         0.2,
         "m/s",
@@ -171,7 +171,7 @@ def terminal_velocity() -> Result:
         base = _run(robot, _pool(folder, 10.0, 10.0, (0, 0, 0)), 6.0)
     sinking = -(base[-1, 2] - base[-121, 2]) / (120 * DT)
     return _result(
-        "archimedes-terminal",
+        "water.archimedes-terminal",
         "sinking speed of a dense link falling broadside, m/s",
         published,
         "m/s",
@@ -199,7 +199,7 @@ def mamba(pattern: str, alpha_deg: float, omega_deg: float, delta_deg: float, me
     window = round(cycles * period / DT)
     a, b = base[-window - 1, :2], base[-1, :2]
     speed = float(np.linalg.norm(b - a) / (window * DT))
-    name = f"mamba-{pattern}-a{alpha_deg:g}-w{omega_deg:g}-d{delta_deg:g}"
+    name = f"water.mamba-{pattern}-a{alpha_deg:g}-w{omega_deg:g}-d{delta_deg:g}"
     return _result(
         name,
         f"forward speed, {pattern} alpha {alpha_deg:g} deg, omega {omega_deg:g} deg/s, "
@@ -213,10 +213,10 @@ def mamba(pattern: str, alpha_deg: float, omega_deg: float, delta_deg: float, me
 
 
 CASES: list[Case] = [
-    Case("archimedes-floating-box", True, floating_box),
-    Case("archimedes-neutral", True, neutral_body),
-    Case("archimedes-current", True, current),
-    Case("archimedes-terminal", True, terminal_velocity),
-    Case("mamba-lateral-a30-w70-d40", False, lambda: mamba("lateral", 30, 70, 40, 0.1288)),
-    Case("mamba-eel-a50-w70-d40", False, lambda: mamba("eel", 50, 70, 40, 0.0894)),
+    Case("water.archimedes-floating-box", True, floating_box),
+    Case("water.archimedes-neutral", True, neutral_body),
+    Case("water.archimedes-current", True, current),
+    Case("water.archimedes-terminal", True, terminal_velocity),
+    Case("water.mamba-lateral-a30-w70-d40", False, lambda: mamba("lateral", 30, 70, 40, 0.1288)),
+    Case("water.mamba-eel-a50-w70-d40", False, lambda: mamba("eel", 50, 70, 40, 0.0894)),
 ]
