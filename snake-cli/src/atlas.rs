@@ -273,6 +273,7 @@ fn run_cell(
     let ramp = match choice {
         GaitChoice::Sine(_) => period,
         GaitChoice::Library(g) => g.params.ramp,
+        GaitChoice::Swim(g) => g.params.ramp,
     };
     let warm = (ramp / period).ceil().max(1.0);
     let seconds = (warm + args.cycles as f64) * period;

@@ -162,3 +162,35 @@ fn swimming_speed_does_not_depend_on_the_added_mass_relaxation() {
         );
     }
 }
+
+/// `--gait swim` and `--gait eel` (GaitChoice) swim mamba-10 head first (-y, where its head points)
+/// in the pool, as the gait library's gaits do on the ground.
+#[test]
+fn the_swimming_gaits_swim_head_first() {
+    use snake_core::gait::{Gait, GaitChoice, GaitKind, JointRoles, LateralUndulation};
+    let spec = RobotSpec::load(&repo().join("robots/mamba-10.yaml")).unwrap();
+    let pool = WorldRef::load(&repo().join("worlds/pool.yaml")).unwrap();
+    for kind in GaitKind::SWIMMING {
+        let choice = GaitChoice::new(
+            kind,
+            &[],
+            0.0,
+            &JointRoles::of_urdf(&spec.urdf),
+            LateralUndulation::default(),
+            1.0 / 240.0,
+        )
+        .unwrap();
+        let GaitChoice::Swim(mut gait) = choice else {
+            panic!("{kind} is a swimming gait");
+        };
+        let mut robot = Robot::in_world(&spec, spec.default_start(), pool.spec()).unwrap();
+        let mut q = [0.0; 9];
+        for _ in 0..240 * 15 {
+            gait.next_targets(&mut q);
+            robot.set_targets(&q).unwrap();
+            robot.step().unwrap();
+        }
+        let p = robot.base_state().unwrap().pose.position;
+        assert!(p.y < -1.0 && p.x.abs() < 0.5, "{kind}: head at {p:?}");
+    }
+}

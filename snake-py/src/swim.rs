@@ -14,7 +14,7 @@ use crate::to_py;
 /// swim_targets(robot_path, pattern, alpha, omega, delta, steps, offset=0.0, ramp=2.0, dt=1/240) ->
 /// targets: `pattern` "lateral" (g = 1) or "eel" (g = (n - i)/(n + 1)), `alpha` and `delta` radians,
 /// `omega` rad/s, `offset` (phi_0) radians, `ramp` seconds over which the wave grows; float64 of shape
-/// (steps, joints) in the robot's movable-joint order, row s at t = (s + 1) dt.
+/// (steps, joints) in the robot's movable-joint order, row s at t = s dt (the targets before step s + 1).
 #[pyfunction]
 #[pyo3(signature = (robot_path, pattern, alpha, omega, delta, steps, offset=0.0, ramp=2.0, dt=1.0/240.0))]
 #[allow(clippy::too_many_arguments)]

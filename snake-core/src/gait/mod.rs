@@ -7,6 +7,8 @@
 //! - [`joints`]: which joints are yaw and which pitch, from the joint axes at rest.
 //! - [`steered`]: [`SteeredWave`], a library gait steered as it runs (the envs' wave on a robot whose
 //!   robot file names one).
+//! - [`swim`]: [`Swim`], Kelasidi et al.'s swimming gaits for water (`swim`: lateral undulation,
+//!   `eel`: eel-like motion), on the yaw joints.
 //!
 //! [`GaitChoice::new`] makes any of them by name with `KEY=VALUE` parameters, as `snake-cli run --gait
 //! NAME --gait-param KEY=VALUE` does.
@@ -49,6 +51,10 @@ pub enum GaitKind {
     Linear,
     /// Turning in place (`turn`).
     Turn,
+    /// Kelasidi et al.'s lateral undulation for swimming (`swim`, [`Swim`]).
+    Swim,
+    /// Kelasidi et al.'s eel-like motion (`eel`, [`Swim`]).
+    Eel,
 }
 
 impl GaitKind {
@@ -62,6 +68,10 @@ impl GaitKind {
         GaitKind::Turn,
     ];
 
+    /// The swimming gaits (for water: docs/media.md), apart from [`GaitKind::ALL`], the gaits the
+    /// atlas draws on the ground.
+    pub const SWIMMING: [GaitKind; 2] = [GaitKind::Swim, GaitKind::Eel];
+
     /// The gait's name on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -71,6 +81,8 @@ impl GaitKind {
             GaitKind::Roll => "roll",
             GaitKind::Linear => "linear",
             GaitKind::Turn => "turn",
+            GaitKind::Swim => "swim",
+            GaitKind::Eel => "eel",
         }
     }
 
@@ -78,6 +90,7 @@ impl GaitKind {
     pub fn param_keys(self) -> &'static [&'static str] {
         match self {
             GaitKind::Sine => &sine::PARAM_KEYS,
+            GaitKind::Swim | GaitKind::Eel => &swim::PARAM_KEYS,
             _ => &serpenoid::PARAM_KEYS,
         }
     }
@@ -95,9 +108,14 @@ impl std::str::FromStr for GaitKind {
     fn from_str(s: &str) -> Result<Self> {
         GaitKind::ALL
             .into_iter()
+            .chain(GaitKind::SWIMMING)
             .find(|k| k.name() == s)
             .ok_or_else(|| {
-                let names: Vec<&str> = GaitKind::ALL.iter().map(|k| k.name()).collect();
+                let names: Vec<&str> = GaitKind::ALL
+                    .iter()
+                    .chain(&GaitKind::SWIMMING)
+                    .map(|k| k.name())
+                    .collect();
                 invalid(format!(
                     "unknown gait '{s}' (expected one of: {})",
                     names.join(", ")
@@ -136,6 +154,8 @@ pub enum GaitChoice {
     Sine(LateralUndulation),
     /// A gait of the library, over all movable joints.
     Library(Serpenoid),
+    /// A swimming gait, over the yaw joints.
+    Swim(Swim),
 }
 
 impl GaitChoice {
@@ -159,6 +179,22 @@ impl GaitChoice {
                 g.validate()?;
                 Ok(GaitChoice::Sine(g))
             }
+            GaitKind::Swim | GaitKind::Eel => {
+                let pattern = if kind == GaitKind::Eel {
+                    SwimPattern::Eel
+                } else {
+                    SwimPattern::Lateral
+                };
+                let mut p = swim::DEFAULTS;
+                for (key, value) in params {
+                    swim::set(&mut p, kind, key, *value)?;
+                }
+                if !steer.is_finite() {
+                    return Err(invalid(format!("steering must be finite, got {steer}")));
+                }
+                p.offset += steer;
+                Ok(GaitChoice::Swim(Swim::new(pattern, p, roles)?.with_dt(dt)?))
+            }
             _ => Ok(GaitChoice::Library(Serpenoid::new(
                 kind, roles, params, steer, dt,
             )?)),
@@ -170,6 +206,7 @@ impl GaitChoice {
         match self {
             GaitChoice::Sine(g) => g.period,
             GaitChoice::Library(g) => g.params.period,
+            GaitChoice::Swim(g) => std::f64::consts::TAU / g.params.omega.max(f64::MIN_POSITIVE),
         }
     }
 }

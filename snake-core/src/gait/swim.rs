@@ -21,6 +21,7 @@
 use serde::Serialize;
 
 use super::joints::{JointRole, JointRoles};
+use super::{Gait, GaitKind};
 use crate::error::{invalid, Result};
 use crate::limits::{check_range, GAIT_AMPLITUDE, GAIT_OFFSET, GAIT_PHASE, GAIT_RAMP};
 
@@ -63,6 +64,39 @@ pub struct SwimParams {
     pub ramp: f64,
 }
 
+/// The `--gait-param` keys of the swimming gaits.
+pub const PARAM_KEYS: [&str; 5] = ["alpha", "omega", "delta", "offset", "ramp"];
+
+/// The swimming gaits' defaults: this project's reading of Kelasidi et al.'s lateral undulation on
+/// Mamba (alpha 30 degrees, omega 70 deg/s, delta 40 degrees; their parameters were not retrieved,
+/// docs/media.md), grown over 2 s.
+pub const DEFAULTS: SwimParams = SwimParams {
+    alpha: 30.0 * std::f64::consts::PI / 180.0,
+    omega: 70.0 * std::f64::consts::PI / 180.0,
+    delta: 40.0 * std::f64::consts::PI / 180.0,
+    offset: 0.0,
+    ramp: 2.0,
+};
+
+/// Sets one parameter of `p` by its `--gait-param` key; an unknown key lists the known ones.
+pub fn set(p: &mut SwimParams, gait: GaitKind, key: &str, value: f64) -> Result<()> {
+    let slot = match key {
+        "alpha" => &mut p.alpha,
+        "omega" => &mut p.omega,
+        "delta" => &mut p.delta,
+        "offset" => &mut p.offset,
+        "ramp" => &mut p.ramp,
+        _ => {
+            return Err(invalid(format!(
+                "unknown gait parameter '{key}' for gait {gait} (expected one of: {})",
+                PARAM_KEYS.join(", ")
+            )))
+        }
+    };
+    *slot = value;
+    Ok(())
+}
+
 /// The largest `omega`, rad/s: a cycle in a twentieth of a second (the library's shortest period).
 pub const MAX_SWIM_OMEGA: f64 = std::f64::consts::TAU / crate::limits::GAIT_PERIOD.0;
 
@@ -78,6 +112,10 @@ pub struct Swim {
     yaw: Vec<usize>,
     #[serde(skip)]
     joints: usize,
+    /// Physics time step, seconds (for [`Gait`]).
+    pub dt: f64,
+    #[serde(skip)]
+    step: u64,
 }
 
 impl Swim {
@@ -111,7 +149,20 @@ impl Swim {
             params,
             yaw,
             joints: roles.roles.len(),
+            dt: 1.0 / 240.0,
+            step: 0,
         })
+    }
+
+    /// The gait stepped every `dt` seconds (positive and finite).
+    pub fn with_dt(mut self, dt: f64) -> Result<Swim> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(invalid(format!(
+                "gait dt must be positive and finite, got {dt}"
+            )));
+        }
+        self.dt = dt;
+        Ok(self)
     }
 
     /// The envelope `g(i, n)` of Kelasidi's joint `i` (1 at the tail) on a robot of `n` links.
@@ -141,14 +192,26 @@ impl Swim {
         }
     }
 
-    /// Targets for `steps` physics steps of `dt` seconds, the first at `t = dt` (the targets a step
-    /// drives towards), row after row.
+    /// Targets for `steps` physics steps of `dt` seconds, row `s` at `t = s dt` (as the gait gives
+    /// them before step `s + 1`, like the library's gaits), row after row.
     pub fn table(&self, dt: f64, steps: usize) -> Vec<f64> {
         let mut out = vec![0.0; steps * self.joints];
         for (s, row) in out.chunks_mut(self.joints.max(1)).enumerate() {
-            self.targets_at((s + 1) as f64 * dt, row);
+            self.targets_at(s as f64 * dt, row);
         }
         out
+    }
+}
+
+impl Gait for Swim {
+    fn next_targets(&mut self, targets: &mut [f64]) {
+        // Time from the step count, as the library's gaits: no drift over long runs.
+        self.targets_at(self.step as f64 * self.dt, targets);
+        self.step += 1;
+    }
+
+    fn reset(&mut self) {
+        self.step = 0;
     }
 }
 
