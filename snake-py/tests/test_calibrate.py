@@ -92,7 +92,9 @@ def test_simulation_is_snake_cli_run(logged, tmp_path):
 
 
 def test_fits_two_parameters_within_5_percent(logged, tmp_path, capsys):
-    """The robot file knows the true gains; the fit finds the velocity limit and the ground friction."""
+    """The robot file knows the true gains; the fit finds the velocity limit and the ground friction
+    (over the default 0.25 s windows, in which the ground friction is gentler than over the whole run:
+    400 simulations where the whole-run error took 200)."""
     from snakesim.runs.calibrate import fitted_robot_yaml
 
     robot = tmp_path / "robot.yaml"
@@ -120,7 +122,7 @@ def test_fits_two_parameters_within_5_percent(logged, tmp_path, capsys):
             "--workers",
             "1",
             "--max-evals",
-            "200",
+            "400",
             "--seed",
             "1",
         ]
@@ -130,7 +132,10 @@ def test_fits_two_parameters_within_5_percent(logged, tmp_path, capsys):
     for key in ("motors.max_velocity", "ground_friction"):
         assert abs(result["fitted"][key] / TRUTH[key] - 1) < 0.05, result
     assert result["error_after"] < result["error_before"]
-    assert result["simulations"] <= 201 and result["wall_seconds"] > 0
+    assert result["simulations"] <= 401 and result["wall_seconds"] > 0
+    for key in ("motors.max_velocity", "ground_friction"):
+        interval = result["intervals"][key]
+        assert interval["identifiable"] and interval["low"] <= TRUTH[key] <= interval["high"], result
     assert set(result["bounds"]) == {"motors.max_velocity", "ground_friction"}
     # The fitted robot file is a robot file whose urdf: resolves, with the fitted gains.
     assert _core.robot_joint_names(str(out)) == _core.robot_joint_names(str(ROBOT))
@@ -663,3 +668,166 @@ def test_piped_progress_is_a_line_per_generation_on_stderr(logged, tmp_path):
     assert lines and all(re.match(r"calibrate: \d+/12 simulations, .*best error", line) for line in lines)
     assert "\r" not in done.stdout + done.stderr
     assert lines[-1].startswith(f"calibrate: {result['simulations'] - 1}/12 simulations")
+
+
+# -- issue 61: windows, restarts, intervals, designed targets ---------------------------------------------
+# The issue's robot and log, made by pybullet 3.2.7 (tests/reference/calibration_log.py --cylinders 9):
+# nine cylinder modules, eight joints, smooth random targets, physics the fit is not told.
+SMOOTH_TRUTH = {"motors.kp": 0.23, "motors.kd": 0.65, "motors.max_velocity": 2.3, "ground_friction": 0.82}
+SMOOTH_BOUNDS = {
+    "motors.kp": (0.05, 0.6),
+    "motors.kd": (0.2, 2.0),
+    "motors.max_velocity": (0.5, 5.0),
+    "ground_friction": (0.2, 1.5),
+}
+CYLINDERS_START = "0,0,0.025,0"
+
+
+def _pybullet_log(out: Path, seconds: float, targets: str, *extra: str) -> Path:
+    truth = [f"--kp={SMOOTH_TRUTH['motors.kp']}", f"--kd={SMOOTH_TRUTH['motors.kd']}"]
+    truth += [f"--max-velocity={SMOOTH_TRUTH['motors.max_velocity']}"]
+    truth += [f"--ground-friction={SMOOTH_TRUTH['ground_friction']}"]
+    subprocess.run(
+        [sys.executable, str(REPO / "tests/reference/calibration_log.py"), str(out), "--cylinders", "9"]
+        + ["--start", CYLINDERS_START, "--seconds", str(seconds), "--targets", targets, *truth, *extra],
+        check=True,
+        capture_output=True,
+    )
+    return out
+
+
+@pytest.fixture(scope="module")
+def smooth_logged(tmp_path_factory) -> Path:
+    """A 2 s pybullet log of the issue's robot under smooth random targets (robot.urdf, targets.csv,
+    log.csv), and beside it (velocities/) the same run logged with its velocities."""
+    out = _pybullet_log(tmp_path_factory.mktemp("smooth"), 2.0, "smooth")
+    _pybullet_log(out / "velocities", 2.0, "smooth", "--velocities")
+    return out
+
+
+def _smooth_problem(folder: Path, window: float) -> calibration.Problem:
+    robot = str(folder / "robot.urdf")
+    names = _core.robot_joint_names(robot)
+    targets = read_targets(folder / "targets.csv", names)
+    log = read_log(folder / "log.csv", len(names), targets.shape[0])
+    start = tuple(float(v) for v in CYLINDERS_START.split(","))
+    return calibration.Problem(robot, targets, log, start=start, window=round(window * 240))
+
+
+def test_the_truth_restarted_from_the_log_is_the_log(smooth_logged):
+    """Windows restarted from the logged state, its velocities estimated from the positions or read
+    from the log: the truth reproduces pybullet's log to rounding, where a 1e-4 change of kp over
+    the whole run misses by an error of about 1 (0.15 cm or 0.15 mrad RMS, on this 2 s log)."""
+    estimated = _smooth_problem(smooth_logged, 0.25)
+    logged = _smooth_problem(smooth_logged / "velocities", 0.25)
+    assert logged.log.shape[1] == 7 + 8 + 6 + 8 and estimated.log.shape[1] == 7 + 8
+    assert np.array_equal(logged.log[:, : 7 + 8], estimated.log)
+    # Backward differences are Bullet's own velocities (semi-implicit Euler) to rounding.
+    assert np.abs(logged.states - estimated.states).max() < 1e-9
+    assert estimated.error(SMOOTH_TRUTH) < 1e-12 and logged.error(SMOOTH_TRUTH) < 1e-12
+    assert estimated.error(SMOOTH_TRUTH, whole=True) == 0.0
+    # A small change is a small error over windows (smooth), not a needle.
+    near = {**SMOOTH_TRUTH, "motors.kp": 0.23 * 1.01}
+    assert 0 < estimated.error(near) < 0.1
+
+
+def test_windows_restarts_and_intervals_fit_the_smooth_random_log(smooth_logged):
+    """The issue's case on a 2 s log (docs/calibration.md measures the 8 s one): each value within 5 %
+    of the truth or reported not identifiable with its reason; every interval holds the truth."""
+    problem = _smooth_problem(smooth_logged, 0.25)
+    result = calibration.calibrate(problem, SMOOTH_BOUNDS, max_evals=700, seed=0)
+    json.dumps(result, allow_nan=False)
+    for key, truth in SMOOTH_TRUTH.items():
+        interval = result["intervals"][key]
+        assert interval["low"] <= truth <= interval["high"], (key, interval, result["fitted"])
+        if interval["identifiable"]:
+            assert abs(result["fitted"][key] / truth - 1) < 0.05, (key, result["fitted"], interval)
+        else:
+            assert interval["reason"].startswith("not identifiable from this log"), interval
+    assert result["intervals"]["motors.max_velocity"]["identifiable"], result["intervals"]
+    assert result["error_after"] < 0.01 and result["whole_run_error_after"] is not None
+    assert result["restarts"][0]["stopped"] in ("settled", "converged"), result["restarts"]
+
+
+def test_the_fitted_file_replays_the_fitted_run_per_link_values_included(logged, tmp_path):
+    """The head's own anisotropic friction used to be left out of the fitted file (written in Python
+    while the simulation applied the values in Rust): it replayed 0.48 m off over 2 s. One mapping now
+    (snake-core's fitted_robot_file): bit for bit, with the per-link and per-joint values."""
+    from snakesim.runs.calibrate import fitted_robot_yaml
+
+    robot = tmp_path / "robot.yaml"
+    robot.write_text(
+        f"urdf: {ROBOT.with_suffix('.urdf')}\nstart: [0, 0, 0.0254, 0]\nmotors: {{kp: 0.1, kd: 1.0}}\n"
+        "anisotropic_friction: [1, 0.8, 0.8]\nlinks:\n  module0: {anisotropic_friction: [1, 0.5, 0.5]}\n"
+        "joints:\n  yaw0: {max_velocity: 2.0}\n"
+    )
+    fitted = {
+        "motors.kp": 0.3,
+        "motors.kd": 0.6,
+        "motors.max_velocity": 4.0,
+        "anisotropic_friction.y": 0.05,  # z is the head's own (0.5) and the others' (0.8)
+    }
+    out = tmp_path / "sub" / "fitted.yaml"
+    out.parent.mkdir()
+    out.write_text(fitted_robot_yaml(robot, fitted, out))
+    names = _core.robot_joint_names(str(ROBOT))
+    targets = read_targets(logged / "targets.csv", names)
+    base, q = _core.simulate_robot(str(robot), targets, None, None, json.dumps(fitted))
+    replay_base, replay_q = _core.simulate_robot(str(out), targets)
+    assert np.array_equal(base, replay_base) and np.array_equal(q, replay_q)
+    # The head's own value matters: a file without it (what the Python writer gave) runs another way.
+    plain = tmp_path / "plain.yaml"
+    plain.write_text(robot.read_text().replace("  module0: {anisotropic_friction: [1, 0.5, 0.5]}\n", ""))
+    without_head, _ = _core.simulate_robot(str(plain), targets, None, None, json.dumps(fitted))
+    assert np.abs(without_head[:, :3] - base[:, :3]).max() > 1e-3
+
+
+@pytest.mark.parametrize(
+    ("window", "expected"),
+    [
+        ("0.001", "--window 0.001: shorter than one physics step (1/240 s"),
+        ("1.6", "--window 1.6: longer than --log"),
+        ("-1", "expected finite seconds >= 0"),
+        ("nan", "expected finite seconds >= 0"),
+    ],
+)
+def test_a_window_the_log_cannot_hold_is_one_line(logged, tmp_path, capsys, no_simulation, window, expected):
+    args = _fit(logged / "targets.csv", logged / "log.csv", "motors.kp=0.1:1")
+    if window in ("-1", "nan"):
+        with pytest.raises(SystemExit):
+            cli.main(["calibrate", *args, "--out", str(tmp_path / "o.yaml"), "--window", window])
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+    else:
+        err = _run([*args, "--window", window], tmp_path, capsys)
+    assert expected in err, err
+
+
+def test_a_log_with_some_velocity_columns_names_the_missing_ones(smooth_logged, tmp_path, capsys):
+    """Velocities are read from the log when it has them all, estimated when it has none; some of them
+    is a one-line error naming the missing columns."""
+    lines = (smooth_logged / "velocities" / "log.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    keep = [i for i, name in enumerate(header) if name not in ("base_wz", "qd7")]
+    log = tmp_path / "partial.csv"
+    log.write_text("\n".join(",".join(line.split(",")[i] for i in keep) for line in lines) + "\n")
+    args = ["--robot", str(smooth_logged / "robot.urdf"), "--targets", str(smooth_logged / "targets.csv")]
+    args += ["--log", str(log), "--fit", "motors.kp=0.1:1"]
+    err = _run(args, tmp_path, capsys)
+    assert "partial.csv:1: the log has velocity columns but lacks base_wz, qd7" in err, err
+
+
+def test_designed_targets_are_written_for_the_robot(tmp_path, capsys):
+    out = tmp_path / "design.csv"
+    code = cli.main(["calibrate", "--robot", str(ROBOT), "--design-targets", str(out), "--seconds", "2"])
+    assert code == 0, capsys.readouterr().err
+    names = _core.robot_joint_names(str(ROBOT))
+    table = read_targets(out, names)
+    assert table.shape == (480, len(names)) and np.abs(table).max() <= 0.6 + 1e-12
+    # Steps: the first part switches between +-0.6 rad from one step to the next.
+    assert np.abs(np.diff(table[:192], axis=0)).max() == pytest.approx(1.2)
+    for bad, expected in ((["--seconds", "0"], "--seconds must be in"), ([], "--robot")):
+        robot = ["--robot", str(tmp_path / "none.yaml")] if not bad else ["--robot", str(ROBOT)]
+        code = cli.main(["calibrate", *robot, "--design-targets", str(tmp_path / "d2.csv"), *bad])
+        err = capsys.readouterr().err.strip()
+        assert code == 1 and expected in err and "\n" not in err, err
+    assert not (tmp_path / "d2.csv").exists()

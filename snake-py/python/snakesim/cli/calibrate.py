@@ -177,7 +177,85 @@ def _g(value: float | None) -> str:
     return "failed" if value is None else f"{value:.6g}"
 
 
+def _seconds(text: str) -> float:
+    """An argparse type: a finite number of seconds >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {text[:24]!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected finite seconds >= 0, got {text[:24]!r}")
+    return value
+
+
+def _check_window(seconds: float, steps: int, log: str) -> int:
+    """--window in physics steps: 0 (the whole run), or at least one step and no longer than the log."""
+    from snakesim.runs.calibrate_windows import DT, window_steps
+
+    if seconds == 0:
+        return 0
+    if seconds < DT * (1 - 1e-9):
+        raise UserError(
+            f"--window {seconds:g}: shorter than one physics step (1/240 s = {DT:.6g} s); give 0 for the "
+            "whole-run error"
+        )
+    if seconds > steps * DT * (1 + 1e-9):
+        raise UserError(
+            f"--window {seconds:g}: longer than --log {log} ({steps} steps, {steps * DT:.6g} s); give at "
+            "most the log's length, or 0 for the whole-run error"
+        )
+    return window_steps(seconds)
+
+
+def _interval_text(entry: dict) -> str:
+    if not entry["identifiable"]:
+        return f"  [{entry['low']:.6g}, {entry['high']:.6g}]  {entry['reason']}"
+    return f"  [{entry['low']:.6g}, {entry['high']:.6g}]"
+
+
+def cmd_design(args: argparse.Namespace) -> int:
+    """--design-targets: writes the designed targets for the robot, nothing else."""
+    from snakesim import _core
+    from snakesim.runs.calibrate_design import design_targets, targets_csv
+    from snakesim.runs.calibrate_windows import DT
+
+    seconds = args.seconds
+    rows = LIMITS["target_rows"]
+    if not DT <= seconds <= rows * DT:
+        raise UserError(
+            f"--seconds must be in [{DT:.6g}, {rows * DT:g}] (LIMITS['target_rows'] steps), got {seconds:g}"
+        )
+    try:
+        names = _core.robot_joint_names(str(args.robot))
+        inputs = _core.robot_files(str(args.robot))
+    except (ValueError, RuntimeError, OSError) as error:
+        raise UserError(f"--robot {args.robot}: {error}") from None
+    with _Outputs([(args.design_targets, "--design-targets")], inputs) as out:
+        text = targets_csv(names, design_targets(len(names), seconds))
+        out.render("--design-targets", lambda tmp: Path(tmp).write_text(text))
+        out.commit()
+    print(
+        f"wrote {args.design_targets}: {round(seconds / DT)} steps of {len(names)} joints (steps, a sweep, "
+        "an undulation; docs/calibration.md)"
+    )
+    return 0
+
+
 def cmd_calibrate(args: argparse.Namespace) -> int:
+    if args.design_targets is not None:
+        return cmd_design(args)
+    missing = [
+        f
+        for f, v in (
+            ("--targets", args.targets),
+            ("--log", args.log),
+            ("--fit", args.fit),
+            ("--out", args.out),
+        )
+        if not v
+    ]
+    if missing:
+        raise UserError(f"the following arguments are required: {', '.join(missing)} (or --design-targets)")
     from snakesim import _core
     from snakesim.runs.calibrate import (
         CalibrationError,
@@ -240,6 +318,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                 log=log,
                 world=None if args.world is None else str(args.world),
                 start=args.start,
+                window=_check_window(args.window, targets.shape[0], args.log),
             )
             try:
                 # The robot, the world and the start build, before any fit: the robot file's own error.
@@ -247,7 +326,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             except (ValueError, RuntimeError) as error:
                 raise CalibrationError(f"--robot {args.robot}: {error}") from None
             # On stderr, one step per generation of CMA-ES: the fit's simulations (the robot file's
-            # own, `before`, not counted) of at most --max-evals, and the best error so far.
+            # own, `before`, not counted) of at most --max-evals, and the best error so far; then the
+            # intervals' simulations, on a line of their own.
             with Progress(args.max_evals, "simulations", "calibrate", args.progress) as shown:
                 result = calibrate(
                     problem,
@@ -270,7 +350,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             if args.json not in (None, "-"):
                 out.render("--json", lambda tmp: Path(tmp).write_text(text))
             if args.plot is not None:
-                out.render("--plot", lambda tmp: draw(tmp, problem, result["fitted"], image_format))
+                errors = (result["error_before"], result["error_after"])
+                out.render("--plot", lambda tmp: draw(tmp, problem, result["fitted"], image_format, errors))
         except OSError as error:
             raise UserError(f"cannot write {error.filename}: {error.strerror or error}") from None
         out.commit()
@@ -278,10 +359,23 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         sys.stdout.write(text)
         return 0
     for key, value in result["fitted"].items():
-        print(f"{key} = {value:.6g}")
+        interval = _interval_text(result["intervals"][key]) if key in result["intervals"] else ""
+        print(f"{key} = {value:.6g}{interval}")
+    window = result["window_seconds"]
+    kind = f"error over {window:g} s windows" if window else "whole-run error"
     print(
-        f"error {_g(result['error_before'])} -> {_g(result['error_after'])} in {result['simulations']} "
-        f"simulations, {result['wall_seconds']:.1f} s ({workers} workers)"
+        f"{kind} {_g(result['error_before'])} -> {_g(result['error_after'])}"
+        + (
+            f"; whole-run error {_g(result['whole_run_error_before'])} -> "
+            f"{_g(result['whole_run_error_after'])}"
+            if window
+            else ""
+        )
+    )
+    print(
+        f"{result['simulations']} simulations in {len(result['restarts'])} run(s) of CMA-ES (stopped: "
+        f"{result['stopped']}), {result['interval_simulations']} for the intervals, "
+        f"{result['wall_seconds']:.1f} s ({workers} workers)"
     )
     print(f"wrote {args.out}" + "".join(f", {p}" for p in (args.json, args.plot) if p is not None))
     return 0
@@ -293,15 +387,15 @@ def add_parser(sub) -> None:
         help="fit a robot file's physics (motor gains, velocity limit, friction, masses) to a logged run",
         description="Fit named physics parameters of a robot file so that the simulated run of its joint "
         "targets reproduces a logged run (a trajectory CSV as snake-cli run --output writes it), with "
-        "CMA-ES over the given bounds, simulations spread over processes. Writes the robot file with the "
+        "IPOP-CMA-ES over the given bounds and an error over short windows, each restarted from the "
+        "logged state, simulations spread over processes; each fitted value gets an interval, or 'not "
+        "identifiable from this log'. Writes the robot file with the "
         "fitted values (--out), the result as JSON and a figure of the logged and simulated path and "
         "joints (docs/calibration.md).",
     )
     p.add_argument("--robot", required=True, metavar="R", help="the robot file (.yaml) or URDF")
-    p.add_argument("--targets", required=True, metavar="T.csv", help="the joint targets that drove the log")
-    p.add_argument(
-        "--log", required=True, metavar="L.csv", help="the logged trajectory (snake-cli run's CSV)"
-    )
+    p.add_argument("--targets", metavar="T.csv", help="the joint targets that drove the log (required)")
+    p.add_argument("--log", metavar="L.csv", help="the logged trajectory (snake-cli run's CSV; required)")
     p.add_argument("--world", metavar="W", help="a world file (default: the flat plane)")
     p.add_argument(
         "--start", type=_start, metavar="X,Y,Z,YAW", help="start pose of the base (default: the robot file's)"
@@ -309,23 +403,40 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--fit",
         action="append",
-        required=True,
         metavar="KEY=LOW:HIGH",
         help="a parameter to fit and its bounds, repeatable: motors.kp, motors.kd, motors.max_velocity, "
         "ground_friction, lateral_friction, anisotropic_friction.x|y|z, skin_friction.forward|backward|"
         "transverse, mass_scale",
     )
-    p.add_argument("--out", required=True, metavar="FITTED.yaml", help="the fitted robot file to write")
+    p.add_argument("--out", metavar="FITTED.yaml", help="the fitted robot file to write (required)")
     p.add_argument("--json", metavar="PATH", help="also write the result as JSON (- : print only JSON)")
     p.add_argument("--plot", metavar="PNG", help="a figure of the logged vs simulated path and joints")
-    p.add_argument("--seed", type=_integer, default=0, help="CMA-ES's seed")
+    p.add_argument("--seed", type=_integer, default=0, help="the search's seed")
     p.add_argument(
         "--max-evals",
         "--budget",
         dest="max_evals",
         type=_integer,
-        default=600,
-        help="most simulations of the fit",
+        default=3000,
+        help="most simulations of the search (IPOP-CMA-ES: restarts with doubled populations until "
+        "two runs agree or this is spent); the intervals add about 100 for 4 keys",
+    )
+    p.add_argument(
+        "--window",
+        type=_seconds,
+        default=0.25,
+        metavar="SECONDS",
+        help="the error over windows of this length, each restarted from the logged state (multiple "
+        "shooting); 0: over the whole run",
+    )
+    p.add_argument(
+        "--design-targets",
+        metavar="T.csv",
+        help="instead of fitting, write joint targets that excite the fitted parameters (steps, a "
+        "sweep, an undulation) for --robot, to run and log on the robot before calibrating",
+    )
+    p.add_argument(
+        "--seconds", type=_seconds, default=8.0, help="length of --design-targets' targets (default 8)"
     )
     p.add_argument("--workers", type=_integer, help="processes that simulate (default: the number of cores)")
     progress_options(p, "generation of simulations")

@@ -53,6 +53,10 @@ from snakesim import _core
 from snakesim.files import open_regular, read_text
 from snakesim.limits import LIMITS
 from snakesim.runs.arguments import ArgumentError, Keyword
+from snakesim.runs.calibrate_intervals import delta_for, intervals
+from snakesim.runs.calibrate_search import ipop
+from snakesim.runs.calibrate_windows import DT as WINDOW_DT
+from snakesim.runs.calibrate_windows import window_states
 
 #: The keys ``fit`` takes (``--fit`` of the command) (snake-core's ``run_targets::Overrides``).
 FIT_KEYS: tuple[str, ...] = (
@@ -76,6 +80,7 @@ MAX_EVALS = LIMITS["calibration_evals"]
 POSITION_SCALE = 0.01  # m
 ANGLE_SCALE = 0.001  # rad
 BASE_COLUMNS = ("step", "t", "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
+VELOCITY_COLUMNS = ("base_vx", "base_vy", "base_vz", "base_wx", "base_wy", "base_wz")
 #: The physics step, s: a log and its targets have one row per step.
 DT = 1.0 / 240.0
 #: Most a log's ``t`` may differ from step x DT, s: time stamps written to the millisecond pass; a row a
@@ -83,9 +88,6 @@ DT = 1.0 / 240.0
 T_TOLERANCE = 1e-3
 #: Longest line of a targets or log CSV, characters (a row of 137 numbers in shortest form is ~3 kB).
 LINE_CHARS = 1 << 20
-#: What CMA-ES is told of a candidate whose simulation failed (or twice the generation's largest finite
-#: error, when that is more), so that it ranks last; the candidate's own error is ``math.inf``.
-FAILED = 1e12
 
 
 class CalibrationError(ArgumentError):
@@ -243,16 +245,41 @@ def read_targets(path: str | os.PathLike, joints: Sequence[str]) -> np.ndarray:
     return np.ascontiguousarray(data[:, order])
 
 
+def velocity_columns(joints: int) -> list[str]:
+    """The optional velocity columns of a log: the base's world-frame linear and angular velocity
+    (``getBaseVelocity``) and the joint velocities."""
+    return [*VELOCITY_COLUMNS, *(f"qd{j}" for j in range(joints))]
+
+
 def read_log(path: str | os.PathLike, joints: int, steps: int) -> np.ndarray:
-    """The logged trajectory as (steps, 7 + joints): base x, y, z, qx, qy, qz, qw, then the joints.
-    Row k is step k at ``t`` = k/240 s (within :data:`T_TOLERANCE`), every value at most
-    ``LIMITS['position']`` in magnitude; a row past ``steps`` is refused before the rest is read."""
+    """The logged trajectory as (steps, 7 + joints): base x, y, z, qx, qy, qz, qw, then the joints;
+    (steps, 13 + 2 joints) when the log also holds the velocities (:func:`velocity_columns`, all of
+    them after the joints, or none). Row k is step k at ``t`` = k/240 s (within :data:`T_TOLERANCE`),
+    every value at most ``LIMITS['position']`` in magnitude; a row past ``steps`` is refused before
+    the rest is read."""
     file = os.fspath(path)
     bound = float(LIMITS["position"])
     values = array("d")
     expected = [*BASE_COLUMNS, *(f"q{j}" for j in range(joints))]
     with contextlib.closing(_lines(path, LOG)) as lines:
         first, header = _header(lines, file)
+        if header != expected and header[: len(expected)] == expected:
+            extra, wanted = header[len(expected) :], velocity_columns(joints)
+            missing = [c for c in wanted if c not in extra]
+            unknown = [c for c in extra if c not in wanted]
+            if unknown:
+                raise CalibrationError(
+                    f"{file}:{first}: column {excerpt(unknown[0])} is not a log column (after the joints "
+                    f"only the velocities {','.join(wanted[:7])},... may follow)"
+                )
+            if missing:
+                raise CalibrationError(
+                    f"{file}:{first}: the log has velocity columns but lacks {', '.join(missing)} "
+                    "(give every velocity column or none; without them they are estimated)"
+                )
+            if extra != wanted:
+                raise CalibrationError(f"{file}:{first}: expected the velocity columns as {','.join(wanted)}")
+            expected = header
         if header != expected:
             q = sum(1 for h in header if h.startswith("q") and h[1:].isdigit())
             if header[: len(BASE_COLUMNS)] == list(BASE_COLUMNS) and q != joints:
@@ -291,7 +318,7 @@ def trajectory_error(base: np.ndarray, joints: np.ndarray, log: np.ndarray) -> f
     when it is not finite (a run that blew up, an error that overflows)."""
     with np.errstate(over="ignore", invalid="ignore"):  # an overflow is a failed candidate, not a warning
         dp = base[:, :3] - log[:, :3]
-        dq = joints - log[:, 7:]
+        dq = joints - log[:, 7 : 7 + joints.shape[1]]
         value = float(np.mean(np.sum(dp * dp, axis=1)) / POSITION_SCALE**2)
         if dq.size:
             value += float(np.mean(dq * dq) / ANGLE_SCALE**2)
@@ -300,7 +327,8 @@ def trajectory_error(base: np.ndarray, joints: np.ndarray, log: np.ndarray) -> f
 
 @dataclass
 class Problem:
-    """A calibration's inputs, read and checked."""
+    """A calibration's inputs, read and checked. ``window``: physics steps per window of the error
+    (:mod:`snakesim.runs.calibrate_windows`); 0 (the default) measures the whole run."""
 
     robot: str
     targets: np.ndarray
@@ -308,16 +336,26 @@ class Problem:
     world: str | None = None
     start: tuple[float, float, float, float] | None = None
     fixed: dict[str, float] = field(default_factory=dict)
+    window: int = 0
+    states: np.ndarray | None = field(default=None, repr=False)
 
-    def simulate(self, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    def __post_init__(self) -> None:
+        if self.window and self.states is None:
+            joints = self.targets.shape[1]
+            self.states = window_states(self.log, joints, self.window)
+
+    def simulate(self, values: dict[str, float], whole: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """The run with ``values`` (over windows unless ``whole`` or the problem has none)."""
+        windows = () if whole or not self.window else (self.window, self.states)
         return _core.simulate_robot(
-            self.robot, self.targets, self.world, self.start, json.dumps({**self.fixed, **values})
+            self.robot, self.targets, self.world, self.start, json.dumps({**self.fixed, **values}), *windows
         )
 
-    def error(self, values: dict[str, float]) -> float:
-        """The candidate's error; ``math.inf`` for one whose simulation fails."""
+    def error(self, values: dict[str, float], whole: bool = False) -> float:
+        """The candidate's error (over windows unless ``whole``); ``math.inf`` for one whose simulation
+        fails."""
         try:
-            base, joints = self.simulate(values)
+            base, joints = self.simulate(values, whole)
         except RuntimeError:  # the engine failed (an unstable candidate)
             return math.inf
         return trajectory_error(base, joints, self.log)
@@ -330,7 +368,7 @@ def check_bounds(problem: Problem, bounds: dict[str, tuple[float, float]]) -> No
     step at each bound, before any fit, instead of a refused candidate in the middle of it."""
     first = Problem(
         problem.robot, problem.targets[:1], problem.log[:1], problem.world, problem.start, problem.fixed
-    )
+    )  # one step: no window restarts
     for key, (low, high) in bounds.items():
         for value in (low, high):
             try:
@@ -348,16 +386,18 @@ class Space:
         self.keys = list(bounds)
         self.bounds = bounds
 
+    def value(self, i: int, u: float) -> float:
+        """Key i's value at ``u`` in [0, 1]."""
+        low, high = self.bounds[self.keys[i]]
+        u = min(max(float(u), 0.0), 1.0)
+        if low > 0:
+            value = math.exp(math.log(low) + u * (math.log(high) - math.log(low)))
+        else:
+            value = low + u * (high - low)
+        return float(min(max(value, low), high))  # within the checked bounds despite rounding
+
     def to_values(self, x: np.ndarray) -> dict[str, float]:
-        out = {}
-        for key, u in zip(self.keys, np.clip(x, 0.0, 1.0)):
-            low, high = self.bounds[key]
-            if low > 0:
-                value = math.exp(math.log(low) + u * (math.log(high) - math.log(low)))
-            else:
-                value = low + u * (high - low)
-            out[key] = float(min(max(value, low), high))  # within the checked bounds despite rounding
-        return out
+        return {key: self.value(i, u) for i, (key, u) in enumerate(zip(self.keys, x))}
 
 
 def population_size(keys: int) -> int:
@@ -405,6 +445,11 @@ def _worker_error(values: dict[str, float]) -> float:
     return _WORKER.error(values)
 
 
+def _worker_whole_error(values: dict[str, float]) -> float:
+    assert _WORKER is not None
+    return _WORKER.error(values, whole=True)
+
+
 def _stop_workers(pool: concurrent.futures.ProcessPoolExecutor) -> None:
     """Ends the pool's processes now, in the middle of their simulations (after Ctrl-C, SIGTERM or an
     error): ``shutdown()`` alone waits for each to finish its candidate, minutes for a long log."""
@@ -421,37 +466,31 @@ def calibrate(
     problem: Problem,
     bounds: dict[str, tuple[float, float]],
     *,
-    max_evals: int = 600,
+    max_evals: int = 3000,
     workers: int = 1,
     seed: int = 0,
     tolerance: float = 1e-3,
+    max_restarts: int = 9,
     progress: Callable[[int, float], None] | None = None,
     error_before: float | None = None,
+    with_intervals: bool = True,
 ) -> dict[str, Any]:
-    """Fits ``bounds``' keys with CMA-ES; returns the JSON result (``fitted``, ``error_before`` (the
-    robot file's own values: ``error_before`` if given, else simulated; None when not finite),
-    ``error_after``, ``simulations``, ``failed_simulations``, ``wall_seconds``, ``bounds``, ...), whose
-    numbers are all finite. CalibrationError when ``max_evals`` is below one generation, or when no
-    candidate gives a finite error."""
-    from cmaes import CMA
-
+    """Fits ``bounds``' keys with IPOP-CMA-ES (:mod:`snakesim.runs.calibrate_search`) on the problem's
+    error (over windows when it has them), then measures each key's interval
+    (:mod:`snakesim.runs.calibrate_intervals`, unless ``with_intervals`` is False). Returns the JSON
+    result (``fitted``, ``intervals``, ``error_before`` (the robot file's own values: ``error_before``
+    if given, else simulated; None when not finite), ``error_after``, the whole-run errors before and
+    after, ``simulations``, ``restarts``, ``wall_seconds``, ...), whose numbers are all finite.
+    CalibrationError when ``max_evals`` is below one generation, or when no candidate gives a finite
+    error. ``max_evals`` bounds the search; the intervals and the whole-run errors add their own
+    simulations (``interval_simulations``)."""
     check_max_evals(max_evals, len(bounds))
     clock = time.monotonic()
     check_bounds(problem, bounds)
     space = Space(bounds)
     dim = len(space.keys)
-    optimizer = CMA(
-        mean=np.full(dim, 0.5),
-        sigma=0.3,
-        bounds=np.array([[0.0, 1.0]] * dim),
-        seed=seed,
-        population_size=population_size(dim),
-    )
     if error_before is None:
         error_before = problem.error({})
-    simulations, failed = 1, 0
-    best_x, best_error = np.full(dim, 0.5), math.inf
-    generations = 0
     pool = None
     if workers > 1:
         pool = concurrent.futures.ProcessPoolExecutor(
@@ -460,33 +499,44 @@ def calibrate(
             initializer=_init_worker,
             initargs=(problem,),
         )
+
+    def evaluate(xs) -> list[float]:
+        candidates = [space.to_values(x) for x in xs]
+        if pool:
+            return list(pool.map(_worker_error, candidates))
+        return [problem.error(c) for c in candidates]
+
     try:
-        while simulations < max_evals + 1:
-            n = min(optimizer.population_size, max_evals + 1 - simulations)
-            if n < optimizer.population_size:
-                break  # a partial generation cannot be told to CMA-ES
-            xs = [optimizer.ask() for _ in range(n)]
-            candidates = [space.to_values(x) for x in xs]
-            errors = (
-                list(pool.map(_worker_error, candidates)) if pool else [problem.error(c) for c in candidates]
+        found = ipop(
+            evaluate,
+            dim,
+            population=population_size(dim),
+            max_evals=max_evals,
+            seed=seed,
+            tolerance=tolerance,
+            max_restarts=max_restarts,
+            progress=(lambda n, best, run: progress(1 + n, best)) if progress else None,
+        )
+        if not math.isfinite(found.best_error):
+            raise CalibrationError(
+                f"no fit: every one of the {found.failed} candidates' simulations failed (the physics blew "
+                "up, or the error against the log is not finite); check the log, the targets and the ",
+                FIT,
+                " bounds",
             )
-            simulations += n
-            generations += 1
-            finite = [e for e in errors if math.isfinite(e)]
-            failed += n - len(finite)
-            # A failed candidate ranks last; its error is never the fit's.
-            last = min(max([FAILED, *(2 * e for e in finite)]), np.finfo(np.float64).max)
-            optimizer.tell([(x, e if math.isfinite(e) else last) for x, e in zip(xs, errors)])
-            if finite:
-                k = int(np.argmin(errors))
-                if errors[k] < best_error:
-                    best_x, best_error = xs[k], errors[k]
-            if progress:
-                progress(simulations, best_error)
-            # Converged: the generation's candidates all lie within `tolerance` (of [0, 1]) of each other.
-            spread = float(np.max(np.ptp(np.array(xs), axis=0)))
-            if optimizer.should_stop() or spread < tolerance:
-                break
+        fitted = space.to_values(found.best_x)
+        ranges, interval_simulations = ({}, 0)
+        if with_intervals:
+            ranges, interval_simulations = intervals(
+                evaluate, space.keys, space.value, np.asarray(found.best_x), found.best_error
+            )
+        whole = [{}, fitted] if problem.window else []
+        if pool and whole:
+            whole_before, whole_after = pool.map(_worker_whole_error, whole)
+        elif whole:
+            whole_before, whole_after = (problem.error(v, whole=True) for v in whole)
+        else:
+            whole_before, whole_after = error_before, found.best_error
     except BaseException:
         if pool:
             _stop_workers(pool)
@@ -495,28 +545,44 @@ def calibrate(
     finally:
         if pool:
             pool.shutdown(cancel_futures=True)
-    if not math.isfinite(best_error):
-        raise CalibrationError(
-            f"no fit: every one of the {failed} candidates' simulations failed (the physics blew up, or "
-            "the error against the log is not finite); check the log, the targets and the ",
-            FIT,
-            " bounds",
-        )
-    fitted = space.to_values(best_x)
+
+    def finite(value: float) -> float | None:
+        return value if math.isfinite(value) else None
+
     return {
         "fitted": fitted,
-        "error_before": error_before if math.isfinite(error_before) else None,
-        "error_after": best_error,
-        "simulations": simulations,
-        "failed_simulations": failed,
-        "generations": generations,
+        "intervals": ranges,
+        "error_before": finite(error_before),
+        "error_after": found.best_error,
+        "whole_run_error_before": finite(whole_before),
+        "whole_run_error_after": finite(whole_after),
+        "window_seconds": problem.window * WINDOW_DT if problem.window else None,
+        "window_steps": problem.window or None,
+        "simulations": 1 + found.simulations,
+        "interval_simulations": interval_simulations,
+        "failed_simulations": found.failed,
+        "generations": found.generations,
+        "restarts": [
+            {
+                "population": r.population,
+                "simulations": r.simulations,
+                "generations": r.generations,
+                "best_error": finite(r.best_error),
+                "best": space.to_values(np.asarray(r.best_x)) if r.best_x else None,
+                "stopped": r.stopped,
+            }
+            for r in found.runs
+        ],
+        "stopped": found.stopped,
+        "interval_delta": delta_for(found.best_error),
         "wall_seconds": time.monotonic() - clock,
         "bounds": {k: list(v) for k, v in bounds.items()},
         "workers": workers,
         "seed": seed,
         "error": {
             "definition": "mean over steps of |dp|^2/position_scale^2 "
-            "+ mean over joints of dq^2/angle_scale^2",
+            "+ mean over joints of dq^2/angle_scale^2"
+            + (", each window restarted from the logged state" if problem.window else ""),
             "position_scale_m": POSITION_SCALE,
             "angle_scale_rad": ANGLE_SCALE,
         },
@@ -525,59 +591,33 @@ def calibrate(
     }
 
 
-def _yaml_value(v: Any) -> str:
-    return json.dumps(v)  # JSON is YAML's flow style
-
-
 def fitted_robot_yaml(robot: str | os.PathLike, fitted: dict[str, float], out: str | os.PathLike) -> str:
     """The robot file ``robot`` with ``fitted`` written in, as YAML text for ``out`` (its ``urdf:``
-    path made relative to ``out``'s folder). Keys a robot file cannot hold are comments."""
+    path made relative to ``out``'s folder), by snake-core's ``fitted_robot_file``: the mapping the
+    simulation applies, so the file builds the fitted robot, per-link values included. Keys a robot
+    file cannot hold are comments."""
     robot = Path(robot)
     if robot.suffix.lower() in (".yaml", ".yml"):
         data = json.loads(_core.parse_yaml(read_text(robot, "config_bytes")))
         urdf = robot.parent / data["urdf"]
     else:
-        data, urdf = {}, robot
-    data["urdf"] = os.path.relpath(os.path.realpath(urdf), os.path.realpath(Path(out).parent))
-    motors = dict(data.get("motors") or {})
-    for key in ("kp", "kd", "max_velocity"):
-        if f"motors.{key}" in fitted:
-            motors[key] = fitted[f"motors.{key}"]
-    if "motors.max_velocity" in fitted:
-        for settings in (data.get("joints") or {}).values():
-            if isinstance(settings, dict):
-                settings.pop("max_velocity", None)
-    if motors:
-        data["motors"] = motors
-    axes = [fitted.get(f"anisotropic_friction.{a}") for a in "xyz"]
-    if any(v is not None for v in axes):
-        old = data.get("anisotropic_friction") or [1.0, 1.0, 1.0]
-        data["anisotropic_friction"] = [o if v is None else v for o, v in zip(old, axes)]
-    skin = {
-        k: fitted[f"skin_friction.{k}"]
-        for k in ("forward", "backward", "transverse")
-        if f"skin_friction.{k}" in fitted
-    }
-    if skin:
-        if data.get("skin_friction"):
-            data["skin_friction"] = {**data["skin_friction"], **skin}
-        for settings in (data.get("links") or {}).values():
-            if isinstance(settings, dict) and settings.get("skin_friction"):
-                settings["skin_friction"] = {**settings["skin_friction"], **skin}
-    lines = [f"# {robot.name} with values fitted by snakesim calibrate (docs/calibration.md)."]
-    for key in NOT_IN_ROBOT_FILE:
-        if key in fitted:
-            where = "a world file's ground_friction" if key == "ground_friction" else "no robot-file key"
-            lines.append(f"# fitted {key}: {fitted[key]!r} ({where}; not applied by this file)")
-    lines += [f"{k}: {_yaml_value(v)}" for k, v in data.items()]
-    return "\n".join(lines) + "\n"
+        urdf = robot
+    relative = os.path.relpath(os.path.realpath(urdf), os.path.realpath(Path(out).parent))
+    return _core.fitted_robot_file(str(robot), json.dumps(fitted), relative)
 
 
 def plot(
-    path: str | os.PathLike, problem: Problem, fitted: dict[str, float], image_format: str | None = None
+    path: str | os.PathLike,
+    problem: Problem,
+    fitted: dict[str, float],
+    image_format: str | None = None,
+    errors: tuple[float | None, float | None] | None = None,
 ) -> None:
-    """Logged vs simulated (before and after the fit): the base path from above and every joint, as
-    ``image_format`` (``png``, ``pdf``, ``svg``; default: by the name's extension)."""
+    """Logged vs simulated, with the robot file's values and with the fitted ones: the base path from
+    above and the first joints, as ``image_format`` (``png``, ``pdf``, ``svg``; default: by the name's
+    extension). The log is drawn as thick light lines, the fit dashed and the start dotted over it, the
+    legend below the axes, ``errors`` (before, after) in the title. With windows, the simulated runs are
+    the windowed ones the error measured (each window restarted from the log)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -586,19 +626,41 @@ def plot(
     before_b, before_q = problem.simulate({})
     after_b, after_q = problem.simulate(fitted)
     log = problem.log
-    joints = log.shape[1] - 7
+    joints = problem.targets.shape[1]
+    shown = min(joints, 4)
     t = np.arange(1, log.shape[0] + 1) / 240.0
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))
-    ax.plot(log[:, 0], log[:, 1], "k-", lw=2, label="log")
-    ax.plot(before_b[:, 0], before_b[:, 1], ":", label="robot file")
-    ax.plot(after_b[:, 0], after_b[:, 1], "--", label="fitted")
-    ax.set(xlabel="x (m)", ylabel="y (m)", title="base path", aspect="equal")
-    ax.legend()
-    for j in range(min(joints, 4)):
-        (line,) = bx.plot(t, log[:, 7 + j], "-", lw=2, label=f"q{j} log")
-        bx.plot(t, after_q[:, j], "--", color=line.get_color(), label=f"q{j} fitted")
-    bx.set(xlabel="t (s)", ylabel="joint angle (rad)", title=f"joints (first {min(joints, 4)} of {joints})")
-    bx.legend(fontsize="small", ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100, format=image_format)
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5.6))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    styles = {
+        "log": {"ls": "-", "lw": 5, "alpha": 0.3},
+        "start": {"ls": ":", "lw": 1.2},
+        "fit": {"ls": "--", "lw": 1.4},
+    }
+    ax.plot(log[:, 0], log[:, 1], color="k", **styles["log"])
+    ax.plot(before_b[:, 0], before_b[:, 1], color="k", **styles["start"])
+    ax.plot(after_b[:, 0], after_b[:, 1], color="k", **styles["fit"])
+    ax.set(xlabel="x (m)", ylabel="y (m)", title="base path (from above)", aspect="equal")
+    ax.set_aspect("equal", adjustable="datalim")
+    for j in range(shown):
+        c = colors[j % len(colors)]
+        bx.plot(t, log[:, 7 + j], color=c, **styles["log"])
+        bx.plot(t, before_q[:, j], color=c, **styles["start"])
+        bx.plot(t, after_q[:, j], color=c, **styles["fit"])
+    bx.set(
+        xlabel="t (s)", ylabel="joint angle (rad)", title=f"joints q0..q{shown - 1} (of {joints}), by colour"
+    )
+    from matplotlib.lines import Line2D
+
+    handles = [
+        Line2D([], [], color="grey", **styles["log"], label="log"),
+        Line2D([], [], color="grey", **styles["start"], label="robot file's values (start)"),
+        Line2D([], [], color="grey", **styles["fit"], label="fitted"),
+    ]
+    fig.legend(handles=handles, loc="lower center", ncol=3, frameon=False)
+    kind = f"error over {problem.window / 240:g} s windows" if problem.window else "whole-run error"
+    if errors is not None:
+        before, after = ("failed" if e is None else f"{e:.4g}" for e in errors)
+        fig.suptitle(f"{kind}: {before} (robot file) -> {after} (fitted)")
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.savefig(path, dpi=80, format=image_format)
     plt.close(fig)
