@@ -21,7 +21,6 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-
 from snakesim.media import rft_alpha  # noqa: E402
 from snakesim.validation import sand  # noqa: E402
 from snakesim.validation.simulate import RATE, ROBOTS, robot_gait_targets, run  # noqa: E402
@@ -45,7 +44,8 @@ def alpha_maps() -> None:
 def efficiency_figure() -> list[tuple[float, float]]:
     sweep = sand.efficiency_sweep()
     fig, axis = plt.subplots(figsize=(5, 3.5), constrained_layout=True)
-    axis.plot([a for a, _ in sweep], [e for _, e in sweep], "o-", label="snakesim (RFT), robot sandfish, 1 Hz")
+    label = "snakesim (RFT), robot sandfish, 1 Hz"
+    axis.plot([a for a, _ in sweep], [e for _, e in sweep], "o-", label=label)
     axis.axvline(0.2, color="grey", ls="--", label="Maladen et al.: peak near A/lambda 0.2")
     axis.axhline(0.34, color="k", ls=":", label="measured 0.34 +- 0.02 (A/lambda 0.2)")
     axis.set_xlabel("A / lambda")
@@ -106,7 +106,8 @@ def on_the_surface() -> None:
     for name, w in (("sand", sand_world), ("rigid plane, friction 0.3", world("ground_friction: 0.3\n"))):
         base = run(robot, targets, w)
         d = base[-1, :2] - base[0, :2]
-        print(f"yaw-pitch-16, its gait, 10 s on {name}: moved {np.hypot(*d):.3f} m ({d[0]:+.3f}, {d[1]:+.3f})")
+        moved = f"{np.hypot(*d):.3f} m ({d[0]:+.3f}, {d[1]:+.3f})"
+        print(f"yaw-pitch-16, its gait, 10 s on {name}: moved {moved}")
 
 
 def main() -> None:

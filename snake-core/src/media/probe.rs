@@ -107,7 +107,8 @@ pub fn probe(medium: &Granular, plate: &Plate) -> Result<ProbeResult> {
             orientation: UnitQuaternion::identity(),
         },
     };
-    let link = LinkGeometry::new(1.0, vec![shape], Some(medium.element), "element")?;
+    // Mass 0: the plate is moved, not simulated, so no stability bound raises `elastic` for it.
+    let link = LinkGeometry::new(0.0, vec![shape], Some(medium.element), "element")?;
     let centre = Vector3::new(
         0.5 * (r.min[0] + r.max[0]),
         0.5 * (r.min[1] + r.max[1]),
