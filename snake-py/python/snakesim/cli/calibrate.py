@@ -404,9 +404,9 @@ def add_parser(sub) -> None:
         "--fit",
         action="append",
         metavar="KEY=LOW:HIGH",
-        help="a parameter to fit and its bounds, repeatable: motors.kp, motors.kd, motors.max_velocity, "
-        "ground_friction, lateral_friction, anisotropic_friction.x|y|z, skin_friction.forward|backward|"
-        "transverse, mass_scale",
+        help="a parameter to fit and its bounds (required), repeatable: motors.kp, motors.kd, "
+        "motors.max_velocity, ground_friction, lateral_friction, anisotropic_friction.x|y|z, "
+        "skin_friction.forward|backward|transverse, mass_scale",
     )
     p.add_argument("--out", metavar="FITTED.yaml", help="the fitted robot file to write (required)")
     p.add_argument("--json", metavar="PATH", help="also write the result as JSON (- : print only JSON)")
@@ -419,7 +419,7 @@ def add_parser(sub) -> None:
         type=_integer,
         default=3000,
         help="most simulations of the search (IPOP-CMA-ES: restarts with doubled populations until "
-        "two runs agree or this is spent); the intervals add about 100 for 4 keys",
+        "two runs agree or this is spent); the intervals add about 30 per fitted key",
     )
     p.add_argument(
         "--window",
