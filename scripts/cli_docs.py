@@ -14,7 +14,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 PAGE = REPO / "docs" / "cli.md"
-SNAKE_CLI = ("run", "atlas", "env", "bench", "train")
+SNAKE_CLI = ("run", "atlas", "env", "bench", "train", "probe")
 SNAKESIM = (
     "train",
     "evaluate",
@@ -26,6 +26,7 @@ SNAKESIM = (
     "convert",
     "view",
     "calibrate",
+    "validate",
 )
 
 INTRO = """# The command lines
