@@ -831,3 +831,21 @@ def test_designed_targets_are_written_for_the_robot(tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert code == 1 and expected in err and "\n" not in err, err
     assert not (tmp_path / "d2.csv").exists()
+
+
+def test_the_designed_targets_make_all_four_identifiable(smooth_logged, tmp_path, capsys):
+    """--design-targets for the issue's robot, run by pybullet with the truth (2 s here; the 8 s log is
+    measured in docs/calibration.md): all four values identifiable, within 5 %, inside their intervals."""
+    targets = tmp_path / "targets.csv"
+    code = cli.main(
+        ["calibrate", "--robot", str(smooth_logged / "robot.urdf"), "--design-targets", str(targets)]
+        + ["--seconds", "2"]
+    )
+    assert code == 0, capsys.readouterr().err
+    folder = _pybullet_log(tmp_path / "design", 2.0, str(targets))
+    problem = _smooth_problem(folder, 0.25)
+    result = calibration.calibrate(problem, SMOOTH_BOUNDS, max_evals=700, seed=0)
+    for key, truth in SMOOTH_TRUTH.items():
+        interval = result["intervals"][key]
+        assert interval["identifiable"] and interval["low"] <= truth <= interval["high"], (key, interval)
+        assert abs(result["fitted"][key] / truth - 1) < 0.05, (key, result["fitted"])
