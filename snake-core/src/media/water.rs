@@ -761,16 +761,38 @@ impl Water {
         let v = frame.inverse_transform_vector(&(state.linear - self.current));
         let w = frame.inverse_transform_vector(&state.angular);
         let lin = hydro.linear;
-        let drag = |c: f64, u: f64| -c * (lin * u + u.abs() * u);
+        // Drag and moments, each component at most what stops the link's relative motion in one
+        // step: applied explicitly, a drag of `c` on a link of mass `m` reverses the motion (and grows)
+        // once `c dt / m > 2`, which a light, large link (a 60 g, 0.5 m cube) reaches. The limit
+        // uses the link's own mass and inertia (a chained link moves more mass, so it is the
+        // conservative side); on mamba-10 (`c dt / m` about 0.07) it never binds.
+        let (m, dt_ok) = (hydro.mass.max(f64::MIN_POSITIVE), dt > 0.0);
+        let limit = |f: f64, u: f64, inertia: f64| {
+            if dt_ok {
+                let most = inertia * u.abs() / dt;
+                f.clamp(-most, most)
+            } else {
+                f
+            }
+        };
+        let drag = |c: f64, u: f64| limit(-c * (lin * u + u.abs() * u) * wet, u, m);
+        let (r, l) = (
+            (hydro.half_width[0] + hydro.half_width[1]) / 2.0,
+            hydro.length,
+        );
+        let (spin_inertia, cross_inertia) = (m * r * r / 2.0, m * (3.0 * r * r + l * l) / 12.0);
+        let moment = |l2: f64, l3: f64, u: f64| {
+            limit(-(l2 * lin * u + l3 * u.abs() * u) * wet, u, cross_inertia)
+        };
         let mut f = Vector3::new(
             drag(hydro.c_t, v.x),
             drag(hydro.c_n[0], v.y),
             drag(hydro.c_n[1], v.z),
         );
         let mut t = Vector3::new(
-            -hydro.spin * w.x.abs() * w.x,
-            -hydro.lambda[0][1] * lin * w.y - hydro.lambda[0][2] * w.y.abs() * w.y,
-            -hydro.lambda[1][1] * lin * w.z - hydro.lambda[1][2] * w.z.abs() * w.z,
+            limit(-hydro.spin * w.x.abs() * w.x * wet, w.x, spin_inertia),
+            moment(hydro.lambda[0][1], hydro.lambda[0][2], w.y),
+            moment(hydro.lambda[1][1], hydro.lambda[1][2], w.z),
         );
         // Added mass and inertia from the relaxed accelerations (see the module's notes).
         if let Some((v0, w0)) = memory.previous {
@@ -785,12 +807,12 @@ impl Water {
         memory.previous = Some((state.linear, state.angular));
         let a = frame.inverse_transform_vector(&memory.accel);
         let alpha = frame.inverse_transform_vector(&memory.angular_accel);
-        f.y -= hydro.mu_n[0] * a.y;
-        f.z -= hydro.mu_n[1] * a.z;
-        t.y -= hydro.lambda[0][0] * alpha.y;
-        t.z -= hydro.lambda[1][0] * alpha.z;
-        out.force += frame * (f * wet);
-        out.torque += frame * (t * wet);
+        f.y -= hydro.mu_n[0] * a.y * wet;
+        f.z -= hydro.mu_n[1] * a.z * wet;
+        t.y -= hydro.lambda[0][0] * alpha.y * wet;
+        t.z -= hydro.lambda[1][0] * alpha.z * wet;
+        out.force += frame * f;
+        out.torque += frame * t;
         out
     }
 }
@@ -1069,6 +1091,36 @@ mod tests {
             (last_a - push / (2.0 * mass)).abs() < 1e-9 * last_a,
             "{last_a}"
         );
+    }
+
+    /// A light, large link: explicit drag would overshoot (c dt / m of about 17); the limited drag
+    /// stops its relative motion in a step at most, never reverses it.
+    #[test]
+    fn drag_never_reverses_a_light_links_motion() {
+        let (r, len, mass) = (0.25, 0.5, 0.06);
+        // Drag alone: the added mass (here 1,600 times the link's) has its own regularisation.
+        let c = Coefficients {
+            added_mass: 0.0,
+            ..Coefficients::default()
+        };
+        let (hydro, solids) = cylinder_link(r, len, mass, c);
+        let w = water([0.0; 3]);
+        let dt = 1.0 / 240.0;
+        let mut m = Memory::default();
+        let mut v = 1.0;
+        for _ in 0..50 {
+            let f = w.wrench_of(
+                &hydro,
+                solids.iter().copied(),
+                &at(-1.0, Vector3::new(0.0, v, 0.0)),
+                dt,
+                Vector3::zeros(),
+                &mut m,
+            );
+            let next = v + dt * f.force.y / mass;
+            assert!(next >= -1e-12 && next <= v, "{v} -> {next}");
+            v = next;
+        }
     }
 
     #[test]
