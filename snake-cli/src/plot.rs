@@ -189,12 +189,43 @@ impl PathPlot {
             }
         }
         if text {
+            // The legend goes in the corner the drawing leaves emptiest (a corner's band: half the
+            // width, the outer quarter of the height), so that it covers as little of it as can be.
+            let points: Vec<(f64, f64)> = self
+                .snapshots
+                .iter()
+                .flat_map(|(_, poses)| poses.iter().map(|p| (p.position.x, p.position.y)))
+                .chain(self.trace.iter().copied())
+                .collect();
+            let in_corner = |right: bool, top: bool| {
+                points
+                    .iter()
+                    .filter(|&&(x, y)| {
+                        (x > cx) == right
+                            && if top {
+                                y > cy + span / 4.0
+                            } else {
+                                y < cy - span / 4.0
+                            }
+                    })
+                    .count()
+            };
+            let corners = [
+                (SeriesLabelPosition::UpperRight, in_corner(true, true)),
+                (SeriesLabelPosition::UpperLeft, in_corner(false, true)),
+                (SeriesLabelPosition::LowerRight, in_corner(true, false)),
+                (SeriesLabelPosition::LowerLeft, in_corner(false, false)),
+            ];
+            let (corner, _) = corners
+                .into_iter()
+                .min_by_key(|&(_, count)| count)
+                .expect("four corners");
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
+                .position(corner)
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK.mix(0.4))
-                .label_font(("sans-serif", 14))
+                .label_font(("sans-serif", (size / 64).clamp(10, 14)))
                 .draw()
                 .map_err(|e| err(&e))?;
         }
