@@ -157,7 +157,7 @@ impl LinkGeometry {
         let mut elements = Vec::new();
         if let Some(e) = element {
             let count: f64 = shapes.iter().map(|s| s.primitive.element_count(e)).sum();
-            if !(count <= MAX_MEDIUM_ELEMENTS as f64) {
+            if count.is_nan() || count > MAX_MEDIUM_ELEMENTS as f64 {
                 return Err(invalid(format!(
                     "{what}: {} m cuts a link into about {count:.0} surface elements, more than {MAX_MEDIUM_ELEMENTS}: raise it",
                     crate::limits::short(e)
