@@ -849,3 +849,52 @@ def test_the_designed_targets_make_all_four_identifiable(smooth_logged, tmp_path
         interval = result["intervals"][key]
         assert interval["identifiable"] and interval["low"] <= truth <= interval["high"], (key, interval)
         assert abs(result["fitted"][key] / truth - 1) < 0.05, (key, result["fitted"])
+
+
+def test_intervals_are_the_profile_of_a_known_error():
+    """Against closed forms: for E = E0 + a (u0 - c)^2 the interval of u0 is c +- sqrt(DELTA / a); for an
+    error in which u0 and u1 trade off (E = (u0 - u1)^2 + b (u0 + u1 - 1)^2) it is the profile's, wider
+    than a slice through the fit; a key the error ignores is not identifiable, with the reason."""
+    from snakesim.runs import calibrate_intervals as ci
+
+    def batch(f):
+        return lambda xs: [f(np.asarray(x)) for x in xs]
+
+    keys, identity = ["motors.kp", "ground_friction"], (lambda i, u: u)
+    a, e0 = 40.0, 0.05
+    delta = ci.delta_for(e0)
+    result, spent = ci.intervals(
+        batch(lambda u: e0 + a * (u[0] - 0.4) ** 2), keys, identity, np.array([0.4, 0.5]), e0
+    )
+    half = math.sqrt(delta / a)
+    kp = result["motors.kp"]
+    assert kp["identifiable"] and kp["low"] == pytest.approx(0.4 - half, abs=0.004), kp
+    assert kp["high"] == pytest.approx(0.4 + half, abs=0.004), kp
+    friction = result["ground_friction"]
+    assert not friction["identifiable"] and (friction["low"], friction["high"]) == (0.0, 1.0)
+    assert friction["reason"].startswith("not identifiable from this log: the error stays within 0.1")
+    assert "lower and upper bounds" in friction["reason"] and "slide" in friction["reason"]
+    assert spent < 80
+    # Trading off: E = (u0 - u1)^2 + b (u0 + u1 - 1)^2, minimum 0 at (0.5, 0.5). With u1 free, the
+    # profile of u0 is E = 4b/(1 + b) (u0 - 0.5)^2; a slice (u1 held) would give (1 + b) (u0 - 0.5)^2.
+    b = 0.01
+    result, _ = ci.intervals(
+        batch(lambda u: (u[0] - u[1]) ** 2 + b * (u[0] + u[1] - 1) ** 2),
+        keys,
+        identity,
+        np.array([0.5, 0.5]),
+        0.0,
+    )
+    profile = math.sqrt(ci.DELTA * (1 + b) / (4 * b))  # 1.59: past both bounds
+    assert profile > 0.5 and not result["motors.kp"]["identifiable"], result
+    b = 0.25  # profile half-width 0.354, a slice's 0.283
+    result, _ = ci.intervals(
+        batch(lambda u: (u[0] - u[1]) ** 2 + b * (u[0] + u[1] - 1) ** 2),
+        keys,
+        identity,
+        np.array([0.5, 0.5]),
+        0.0,
+    )
+    profile = math.sqrt(ci.DELTA * (1 + b) / (4 * b))
+    assert result["motors.kp"]["high"] == pytest.approx(0.5 + profile, abs=0.01), result
+    assert result["motors.kp"]["low"] == pytest.approx(0.5 - profile, abs=0.01), result

@@ -419,7 +419,7 @@ def add_parser(sub) -> None:
         type=_integer,
         default=3000,
         help="most simulations of the search (IPOP-CMA-ES: restarts with doubled populations until "
-        "two runs agree or this is spent); the intervals add about 30 per fitted key",
+        "two runs agree or this is spent); the intervals add about 35 per fitted key",
     )
     p.add_argument(
         "--window",

@@ -28,7 +28,7 @@ DELTA = 0.1
 DELTA_FRACTION = 0.1
 HESSIAN_STEP = 0.01
 OFFSETS = (0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.4, 0.7, 1.0)
-BISECTIONS = 3
+BISECTIONS = 5
 
 #: Why a log may not pin a key, for the reason.
 HINTS = {
