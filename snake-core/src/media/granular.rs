@@ -316,20 +316,8 @@ pub fn element_stress(
     let s = up.cross(&r);
     let scale = zeta * depth;
     let mut stress = Vector3::zeros();
-    // The pressure the element bears when it advances along its own normal (Li's stress for that
-    // motion, its component along the normal): what friction across the plane acts against.
     let (nr, nz) = (n.dot(&r), n.z);
     let np = nr.hypot(nz);
-    let pressure = if np > 1e-12 {
-        // beta from the normal in the plane: the leading normal of a plate at beta is (sin b, -cos b).
-        let (sb, cb) = (nr / np, -nz / np);
-        let (c2b, s2b) = (cb * cb - sb * sb, 2.0 * sb * cb);
-        // Pushed along its normal: gamma with (cos g, -sin g) = (nr, nz) / np.
-        let (ax, az) = c.alpha_cs(c2b, s2b, nr / np, -nz / np);
-        (az * nz - ax * nr).abs() / np
-    } else {
-        0.0
-    };
     // In the plane: the motion's part along r and z.
     let mut dr = d.dot(&r);
     if dr < 0.0 {
@@ -349,10 +337,14 @@ pub fn element_stress(
         let (ax, az) = c.alpha_cs(c2b, s2b, dr / p, -dz / p);
         stress += p * scale * (az * up - ax * r);
     }
-    // Across the plane: grains sliding along the surface, resisted by friction.
+    // Across the plane: grains sliding along the surface, resisted by Coulomb friction on the
+    // pressure the face bears (the normal part of Li's stress; none on a trailing face), along the
+    // sliding's share across the plane.
     let ds = d.dot(&s);
-    if mu > 0.0 && ds != 0.0 {
-        stress -= ds * mu * pressure * scale * s;
+    let tangential = (d - d.dot(n) * n).norm();
+    if mu > 0.0 && ds != 0.0 && tangential > 1e-12 {
+        let pressure = stress.dot(n).abs();
+        stress -= (ds / tangential) * mu * pressure * s;
     }
     stress
 }

@@ -112,7 +112,7 @@ def _efficiency(frequency: float) -> Result:
 
 
 def _rigid_no_advance() -> Result:
-    forward, wave = _sandfish_speed(RIGID, 0.2, 1.0, start=(0.0, 0.0, 0.015, 0.0))
+    forward, wave = _sandfish_speed(RIGID, 0.2, 1.0, start=(0.0, 0.0, 0.0175, 0.0))
     per_cycle = abs(forward) / 1.0 / BODY
     return Result(
         name="sand.sandfish-rigid-ground",
