@@ -15,9 +15,10 @@
 //! by the share of the motion in each, as Treers, Cao and Stuart 2021 (IEEE RA-L 6:1887, "Granular
 //! resistive force theory implementation for three-dimensional trajectories") do: the plane is the
 //! vertical plane of the element's normal (r: the normal's horizontal direction, s = z x r across it);
-//! the motion's part in that plane (share `p`) takes Li's stress, and its part across the plane (share
-//! `|d_s|`), a sliding of the grains along the surface, takes the body-grain friction `mu` times the
-//! pressure the element bears when pushed along its normal. We use this rather than Agarwal, Goldman and
+//! the motion's part in that plane (share `p`) takes Li's stress, and its part across the plane, a
+//! sliding of the grains along the surface, takes Coulomb friction: the body-grain friction `mu` times
+//! the pressure the element bears under that stress (none on a trailing face), along the sliding's
+//! share across the plane. We use this rather than Agarwal, Goldman and
 //! Kamrin's 3D-RFT (PNAS 2023, 120:e2214017120), whose fitted functions we could not retrieve here to
 //! cite; both reduce to Li's law in the plane.
 //!
