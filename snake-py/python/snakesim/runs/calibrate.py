@@ -16,6 +16,9 @@ with p the base position (x, y, z) and q the joint angles, POSITION_SCALE 1 cm a
 0.001 rad (about a 12-bit encoder's step): an error of 1 is a root-mean-square miss of 1 cm of the base,
 or of 0.001 rad of every joint. The joints weigh this much because they pin the motor parameters
 whatever the ground does (docs/calibration.md: without it, kp and the ground friction trade off).
+With ``Problem.window`` the simulated run is cut into windows, each restarted from the logged state at
+its start (:mod:`snakesim.runs.calibrate_windows`, multiple shooting): the same error over a run that
+cannot drift away from the log, so that a small miss in a parameter stays a small error.
 
 A candidate whose simulation fails (the engine refuses it, or its error is not finite) scores
 ``math.inf``: CMA-ES ranks it last, and it is never the fit. A calibration none of whose candidates
@@ -23,9 +26,11 @@ gives a finite error is refused (:class:`CalibrationError`), as are inputs beyon
 ``snake-cli run --targets`` (``LIMITS['target_rows']`` rows, ``LIMITS['csv_bytes']``) and log values
 beyond ``LIMITS['position']``.
 
-Optimizer: CMA-ES (the ``cmaes`` package, bounded) over the fitted keys mapped to [0, 1] (linearly, or
-logarithmically where the lower bound is > 0: gains and frictions are scales), each generation's
-candidates simulated in parallel processes. Every simulation can be interrupted: Ctrl-C or SIGTERM
+Optimizer: IPOP-CMA-ES (:mod:`snakesim.runs.calibrate_search`: the ``cmaes`` package, bounded,
+restarted with doubled populations until two runs agree) over the fitted keys mapped to [0, 1]
+(linearly, or logarithmically where the lower bound is > 0: gains and frictions are scales), each
+generation's candidates simulated in parallel processes; then each key's interval
+(:mod:`snakesim.runs.calibrate_intervals`). Every simulation can be interrupted: Ctrl-C or SIGTERM
 ends one in the main process within 20 ms (``_core.simulate_robot``), and ends the worker processes
 at once (:func:`_stop_workers`).
 """
