@@ -96,6 +96,41 @@ pub struct Overrides {
     /// Factor on the mass of the base and every link (the randomized physics' `mass_scale`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass_scale: Option<f64>,
+    /// Water's `C_f` on every link (a robot file's `water: {skin_friction}`, per-link values replaced too).
+    #[serde(
+        rename = "water.skin_friction",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub water_skin_friction: Option<f64>,
+    /// Water's `C_D` on every link (a robot file's `water: {drag}`, per-link values replaced too).
+    #[serde(
+        rename = "water.drag",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub water_drag: Option<f64>,
+    /// Water's `C_A` on every link (a robot file's `water: {added_mass}`, per-link values replaced too).
+    #[serde(
+        rename = "water.added_mass",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub water_added_mass: Option<f64>,
+    /// Water's `C_M` on every link (a robot file's `water: {added_inertia}`, per-link values replaced too).
+    #[serde(
+        rename = "water.added_inertia",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub water_added_inertia: Option<f64>,
+    /// Water's the linear drag's weight on every link (a robot file's `water: {linear}`, per-link values replaced too).
+    #[serde(
+        rename = "water.linear",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub water_linear: Option<f64>,
 }
 
 impl Overrides {
@@ -134,7 +169,35 @@ impl Overrides {
         ] {
             at_least_0(key, v, MAX_FIT_VALUE)?;
         }
+        for (key, v) in self.water_keys() {
+            at_least_0(key, v, crate::limits::MAX_HYDRO_COEFFICIENT)?;
+        }
         above_0("mass_scale", self.mass_scale, MAX_PHYSICS_SCALE)
+    }
+
+    /// The water fit keys and their values (issue 60).
+    fn water_keys(&self) -> [(&'static str, Option<f64>); 5] {
+        [
+            ("water.skin_friction", self.water_skin_friction),
+            ("water.drag", self.water_drag),
+            ("water.added_mass", self.water_added_mass),
+            ("water.added_inertia", self.water_added_inertia),
+            ("water.linear", self.water_linear),
+        ]
+    }
+
+    /// The water keys as a robot file's `water` entry (the fitted ones set, the others absent).
+    pub(crate) fn water_file(&self) -> Option<crate::media::water::CoefficientsFile> {
+        if self.water_keys().iter().all(|(_, v)| v.is_none()) {
+            return None;
+        }
+        Some(crate::media::water::CoefficientsFile {
+            skin_friction: self.water_skin_friction,
+            drag: self.water_drag,
+            added_mass: self.water_added_mass,
+            added_inertia: self.water_added_inertia,
+            linear: self.water_linear,
+        })
     }
 
     /// Writes the robot-file parameters into `spec` and the ground friction into `world`.
@@ -177,6 +240,28 @@ impl Overrides {
                 s.forward = self.skin_forward.unwrap_or(s.forward);
                 s.backward = self.skin_backward.unwrap_or(s.backward);
                 s.transverse = self.skin_transverse.unwrap_or(s.transverse);
+            }
+        }
+        // Water's coefficients: the fitted keys over each link's own (which the robot file's
+        // `water` and `links: NAME: water` made).
+        if let Some(fit) = self.water_file() {
+            if !world
+                .media
+                .iter()
+                .any(|m| matches!(m, crate::media::Medium::Water(_)))
+            {
+                let key = self
+                    .water_keys()
+                    .iter()
+                    .find(|(_, v)| v.is_some())
+                    .map_or("water", |k| k.0);
+                return Err(invalid_at(
+                    key,
+                    "the world has no water to fit it in (--world)",
+                ));
+            }
+            for w in &mut spec.water {
+                *w = Some(w.map_or(fit, |own| fit.merged_over(&own)));
             }
         }
         Ok(())

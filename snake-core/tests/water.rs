@@ -194,3 +194,48 @@ fn the_swimming_gaits_swim_head_first() {
         assert!(p.y < -1.0 && p.x.abs() < 0.5, "{kind}: head at {p:?}");
     }
 }
+
+/// `snakesim calibrate --fit water.KEY=...` (run_targets::Overrides): the fitted coefficient reaches
+/// every link, over the robot file's and each link's own, in the simulation and in the fitted robot
+/// file alike; a bad value is named.
+#[test]
+fn water_fit_keys_set_every_links_coefficient() {
+    use snake_core::run_targets::Overrides;
+    let path = robot_file(
+        "fit",
+        "water: {drag: 1.5, linear: 0.5}\nlinks:\n  link9: {water: {drag: 3.0, added_mass: 0.5}}\n",
+    );
+    let overrides =
+        Overrides::from_json(r#"{"water.drag": 2.5, "water.skin_friction": 0.1}"#).unwrap();
+    let mut spec = RobotSpec::load(&path).unwrap();
+    let mut plane = snake_core::WorldSpec::default();
+    let e = overrides
+        .apply_to_spec(&mut spec.clone(), &mut plane)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("water.") && e.contains("no water"), "{e}");
+    let mut world = WorldRef::load(&repo().join("worlds/pool.yaml"))
+        .unwrap()
+        .spec()
+        .clone();
+    overrides.apply_to_spec(&mut spec, &mut world).unwrap();
+    for (k, w) in spec.water.iter().enumerate() {
+        let w = w.expect("every link");
+        assert_eq!(
+            (w.drag, w.skin_friction),
+            (Some(2.5), Some(0.1)),
+            "link {k}"
+        );
+        assert_eq!(w.linear, Some(0.5));
+    }
+    assert_eq!(spec.water[9].unwrap().added_mass, Some(0.5));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut file: snake_core::RobotFile = serde_norway::from_str(&text).unwrap();
+    overrides.apply_to_file(&mut file).unwrap();
+    assert_eq!(file.water.unwrap().drag, Some(2.5));
+    assert_eq!(file.links["link9"].water.unwrap().drag, Some(2.5));
+    assert_eq!(file.links["link9"].water.unwrap().added_mass, Some(0.5));
+    let bad = Overrides::from_json(r#"{"water.added_mass": -1}"#).unwrap();
+    let e = bad.validate().unwrap_err().to_string();
+    assert!(e.contains("water.added_mass"), "{e}");
+}

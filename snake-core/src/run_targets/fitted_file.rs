@@ -74,6 +74,15 @@ impl Overrides {
                 s.transverse = self.skin_transverse.unwrap_or(s.transverse);
             }
         }
+        // Water's coefficients (issue 60): the robot's `water` and every link's that names one.
+        if let Some(fit) = self.water_file() {
+            file.water = Some(file.water.map_or(fit, |own| fit.merged_over(&own)));
+            for link in file.links.values_mut() {
+                if let Some(own) = link.water {
+                    link.water = Some(fit.merged_over(&own));
+                }
+            }
+        }
         Ok(())
     }
 

@@ -406,7 +406,8 @@ def add_parser(sub) -> None:
         metavar="KEY=LOW:HIGH",
         help="a parameter to fit and its bounds (required), repeatable: motors.kp, motors.kd, "
         "motors.max_velocity, ground_friction, lateral_friction, anisotropic_friction.x|y|z, "
-        "skin_friction.forward|backward|transverse, mass_scale",
+        "skin_friction.forward|backward|transverse, mass_scale, "
+        "water.skin_friction|drag|added_mass|added_inertia|linear (a world with water)",
     )
     p.add_argument("--out", metavar="FITTED.yaml", help="the fitted robot file to write (required)")
     p.add_argument("--json", metavar="PATH", help="also write the result as JSON (- : print only JSON)")

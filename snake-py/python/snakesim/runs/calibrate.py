@@ -77,6 +77,11 @@ FIT_KEYS: tuple[str, ...] = (
     "skin_friction.backward",
     "skin_friction.transverse",
     "mass_scale",
+    "water.skin_friction",
+    "water.drag",
+    "water.added_mass",
+    "water.added_inertia",
+    "water.linear",
 )
 #: Keys a robot file cannot hold: reported in the JSON and as a comment of the fitted robot file.
 NOT_IN_ROBOT_FILE = ("ground_friction", "lateral_friction", "mass_scale")
