@@ -664,10 +664,12 @@ def test_piped_progress_is_a_line_per_generation_on_stderr(logged, tmp_path):
     )
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
-    lines = done.stderr.splitlines()
+    *lines, last = done.stderr.splitlines()
     assert lines and all(re.match(r"calibrate: \d+/12 simulations, .*best error", line) for line in lines)
     assert "\r" not in done.stdout + done.stderr
     assert lines[-1].startswith(f"calibrate: {result['simulations'] - 1}/12 simulations")
+    # Then the intervals, which the search's count does not hold, on a line of their own.
+    assert last == "calibrate: the intervals of 1 key(s), about 35 simulations", last
 
 
 # -- issue 61: windows, restarts, intervals, designed targets ---------------------------------------------

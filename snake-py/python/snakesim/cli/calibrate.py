@@ -339,6 +339,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                         simulations - 1, f"best error {_g(best) if math.isfinite(best) else '-'}"
                     ),
                     error_before=before,
+                    # A line of its own (none with --no-progress): the search's count does not hold it.
+                    stage=(lambda text: shown.write(f"calibrate: {text}")) if shown.mode != "none" else None,
                 )
             yaml_text = fitted_robot_yaml(args.robot, result["fitted"], args.out)
         except CalibrationError as error:

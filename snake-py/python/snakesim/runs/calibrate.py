@@ -484,6 +484,7 @@ def calibrate(
     progress: Callable[[int, float], None] | None = None,
     error_before: float | None = None,
     with_intervals: bool = True,
+    stage: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Fits ``bounds``' keys with IPOP-CMA-ES (:mod:`snakesim.runs.calibrate_search`) on the problem's
     error (over windows when it has them), then measures each key's interval
@@ -493,7 +494,8 @@ def calibrate(
     after, ``simulations``, ``restarts``, ``wall_seconds``, ...), whose numbers are all finite.
     CalibrationError when ``max_evals`` is below one generation, or when no candidate gives a finite
     error. ``max_evals`` bounds the search; the intervals and the whole-run errors add their own
-    simulations (``interval_simulations``)."""
+    simulations (``interval_simulations``). ``progress(simulations, best error)`` after each
+    generation, ``stage(text)`` when the search is over and the intervals begin."""
     check_max_evals(max_evals, len(bounds))
     clock = time.monotonic()
     check_bounds(problem, bounds)
@@ -537,6 +539,8 @@ def calibrate(
         fitted = space.to_values(found.best_x)
         ranges, interval_simulations = ({}, 0)
         if with_intervals:
+            if stage:
+                stage(f"the intervals of {dim} key(s), about {35 * dim} simulations")
             ranges, interval_simulations = intervals(
                 evaluate, space.keys, space.value, np.asarray(found.best_x), found.best_error
             )
