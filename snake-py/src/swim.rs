@@ -53,7 +53,7 @@ fn swim_targets<'py>(
     }
     let joints = spec.urdf.movable_joints().len();
     let table = swim.table(dt, steps);
-    Ok(numpy::PyArray1::from_vec(py, table).reshape([steps, joints])?)
+    numpy::PyArray1::from_vec(py, table).reshape([steps, joints])
 }
 
 /// Registers the function on `_core`.
