@@ -187,6 +187,9 @@ def mamba(pattern: str, alpha_deg: float, omega_deg: float, delta_deg: float, me
 
     robot = ROBOTS / "mamba-10.yaml"
     world = ROBOTS.parent / "worlds" / "pool.yaml"
+    if not (robot.is_file() and world.is_file()):
+        # The robot and the pool ship with the repository, not the package.
+        raise FileNotFoundError(f"the Mamba cases need the repository's {robot} and {world}")
     omega = math.radians(omega_deg)
     period = 2 * math.pi / omega
     cycles = max(1, math.floor(20.0 / period))
