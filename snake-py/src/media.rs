@@ -1,15 +1,17 @@
 //! Media for Python (docs/media.md): `_core.rft_alpha` (Li et al.'s law over numpy arrays, the Rust
 //! function itself), `_core.probe_plate` (the plate experiment of `snake-cli probe`) and
-//! `_core.robot_gait_targets` (a robot file's own gait as joint targets, for `simulate_robot`).
+//! `_core.robot_gait_targets` (a robot file's own gait as joint targets, for `simulate_robot`) and
+//! `_core.sandfish_targets` (Maladen et al.'s wave from the gait library, the same).
 
 use std::path::PathBuf;
 
 use numpy::{PyArray2, PyArrayDyn, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use snake_core::gait::sandfish::{SandfishGait, SandfishWave};
 use snake_core::media::granular::{alpha, Coefficients, CoefficientsFile};
 use snake_core::media::probe::{granular, probe, Plate};
-use snake_core::{Gait, RobotGait, RobotSpec, WorldSpec};
+use snake_core::{Gait, JointRoles, RobotGait, RobotSpec, WorldSpec};
 
 use crate::to_py;
 
@@ -141,8 +143,48 @@ fn robot_gait_targets<'py>(
     Ok(PyArray2::from_owned_array(py, array))
 }
 
-/// Adds `rft_alpha`, `probe_plate` and `robot_gait_targets` to the module.
+/// sandfish_targets(robot_path, amplitude, wavelength, frequency, segment, steps) -> Maladen et al.'s
+/// travelling sine wave (snake_core::gait::sandfish) on the robot's yaw joints as joint targets,
+/// float64 (steps, joints), one row per physics step (1/240 s).
+#[pyfunction]
+fn sandfish_targets<'py>(
+    py: Python<'py>,
+    robot_path: PathBuf,
+    amplitude: f64,
+    wavelength: f64,
+    frequency: f64,
+    segment: f64,
+    steps: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let spec = RobotSpec::load(&robot_path).map_err(to_py)?;
+    if steps > snake_core::limits::MAX_TARGET_ROWS {
+        return Err(PyValueError::new_err(format!(
+            "steps: at most {}, got {steps}",
+            snake_core::limits::MAX_TARGET_ROWS
+        )));
+    }
+    let wave = SandfishWave {
+        amplitude,
+        wavelength,
+        frequency,
+        segment,
+    };
+    let roles = JointRoles::of_urdf(&spec.urdf);
+    let joints = roles.roles.len();
+    let dt = snake_core::SnakeConfig::default().dt;
+    let mut gait = SandfishGait::new(wave, &roles, dt).map_err(to_py)?;
+    let mut rows = vec![0.0; steps * joints];
+    for row in rows.chunks_exact_mut(joints.max(1)) {
+        gait.next_targets(row);
+    }
+    let array = numpy::ndarray::Array2::from_shape_vec((steps, joints), rows)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(PyArray2::from_owned_array(py, array))
+}
+
+/// Adds `rft_alpha`, `probe_plate`, `robot_gait_targets` and `sandfish_targets` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(sandfish_targets, m)?)?;
     m.add_function(wrap_pyfunction!(rft_alpha, m)?)?;
     m.add_function(wrap_pyfunction!(probe_plate, m)?)?;
     m.add_function(wrap_pyfunction!(robot_gait_targets, m)?)

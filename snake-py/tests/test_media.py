@@ -105,6 +105,24 @@ def test_snake_cli_probe_prints_json_and_refuses_bad_angles(tmp_path):
     assert bad.returncode != 0 and "media[0]: zeta" in bad.stderr and bad.stderr.count("\n") == 1
 
 
+def test_the_sandfish_wave_is_maladens_sine_on_the_segments():
+    # y = A sin(2 pi (x / lambda + f t)) along the body (head at 0, body along -x): each segment takes the
+    # slope at its centre, each joint the difference of its segments' angles; written here independently.
+    from snakesim import _core
+
+    robot = REPO / "robots" / "sandfish-robot.yaml"
+    a, lam, f, seg = 0.091, 0.455, 1.0, 0.065
+    got = _core.sandfish_targets(str(robot), a, lam, f, seg, 480)
+    t = np.arange(1, 481)[:, None] / 240.0
+    x = -(np.arange(7)[None, :] + 0.5) * seg
+    k = 2 * np.pi / lam
+    heading = np.arctan(a * k * np.cos(k * x + 2 * np.pi * f * t))
+    assert got.shape == (480, 6)
+    assert np.max(np.abs(got - (heading[:, 1:] - heading[:, :-1]))) <= 1e-12
+    with pytest.raises(ValueError, match="amplitude"):
+        _core.sandfish_targets(str(robot), -1.0, lam, f, seg, 10)
+
+
 #: Quick cases that fail today, each with its figure in docs/media.md ("What is not met"): the robot
 #: sandfish's wave efficiency (0.13 against 0.34) and its advance on rigid ground (0.06 body lengths a cycle).
 KNOWN_GAPS = {

@@ -14,6 +14,7 @@
 //! NAME --gait-param KEY=VALUE` does.
 
 pub mod joints;
+pub mod sandfish;
 pub mod serpenoid;
 pub mod sine;
 pub mod steered;

@@ -170,6 +170,9 @@ def probe_plate(
     world_path: str, length: float, width: float, beta: float, gamma: float, depth: float, speed: float
 ) -> str: ...
 def robot_gait_targets(robot_path: str, steps: int) -> npt.NDArray[np.float64]: ...
+def sandfish_targets(
+    robot_path: str, amplitude: float, wavelength: float, frequency: float, segment: float, steps: int
+) -> npt.NDArray[np.float64]: ...
 def simulate_robot(
     robot_path: str,
     targets: npt.NDArray[np.float64],

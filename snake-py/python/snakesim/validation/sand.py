@@ -17,7 +17,7 @@ from pathlib import Path
 
 from snakesim.media import probe, rft_alpha
 from snakesim.validation import Case, Result, relative
-from snakesim.validation.simulate import RATE, ROBOTS, run, sine_wave_targets
+from snakesim.validation.simulate import RATE, ROBOTS, run, sandfish_targets
 
 LI = "Li, Zhang & Goldman 2013, Science 339:1408"
 MALADEN = "Maladen et al. 2011, IJRR 30(7):793"
@@ -83,13 +83,14 @@ def _sandfish_speed(
     """Forward speed (m/s) over whole cycles after the first, and the wave speed, of the robot sandfish
     driven by the sine wave of ``amplitude`` (A/lambda) with one wave on the body."""
     wavelength = BODY
-    targets = sine_wave_targets(
-        SEGMENTS - 1, SEGMENT, amplitude * wavelength, wavelength, frequency, cycles / frequency
+    robot = ROBOTS / "sandfish-robot.yaml"
+    targets = sandfish_targets(
+        robot, amplitude * wavelength, wavelength, frequency, SEGMENT, cycles / frequency
     )
     with tempfile.TemporaryDirectory() as folder:
         world = Path(folder) / "world.yaml"
         world.write_text(world_text)
-        base = run(ROBOTS / "sandfish-robot.yaml", targets, world, start)
+        base = run(robot, targets, world, start)
     first = int(round(RATE / frequency))
     seconds = (len(base) - 1 - first) / RATE
     forward = (base[-1, 0] - base[first, 0]) / seconds

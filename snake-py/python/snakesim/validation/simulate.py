@@ -1,5 +1,6 @@
 """What the validation cases share: the repository's robots, joint targets of a robot file's own gait
-and of Maladen et al.'s travelling sine wave, and a run of a robot in a world (``_core.simulate_robot``).
+and of Maladen et al.'s travelling sine wave (the gait library's), and a run of a robot in a world
+(``_core.simulate_robot``).
 """
 
 from __future__ import annotations
@@ -31,24 +32,20 @@ def robot_gait_targets(robot: Path, seconds: float) -> npt.NDArray[np.float64]:
     return _core.robot_gait_targets(os.fspath(robot), int(round(seconds * RATE)))
 
 
-def sine_wave_targets(
-    joints: int,
-    segment: float,
+def sandfish_targets(
+    robot: Path,
     amplitude: float,
     wavelength: float,
     frequency: float,
+    segment: float,
     seconds: float,
 ) -> npt.NDArray[np.float64]:
-    """Joint angles that bend a chain of ``joints + 1`` segments of ``segment`` metres into Maladen et
-    al.'s travelling sine wave ``y = A sin(2 pi (x / lambda + f t))`` (travelling from head to tail as
-    the body lies along -x from the head): each segment takes the slope of the wave at its centre, each
-    joint the difference of its two segments' angles."""
-    t = np.arange(1, int(round(seconds * RATE)) + 1) / RATE
-    k = 2.0 * np.pi / wavelength
-    x = -(np.arange(joints + 1) + 0.5) * segment  # segment centres along -x from the head
-    heading = np.arctan(amplitude * k * np.cos(k * x[None, :] + 2.0 * np.pi * frequency * t[:, None]))
-    # Joint i joins segment i (parent) and segment i + 1 (child): the child's angle relative to it.
-    return heading[:, 1:] - heading[:, :-1]
+    """Maladen et al.'s travelling sine wave ``y = A sin(2 pi (x / lambda + f t))`` from the gait library
+    (``snake_core::gait::sandfish``) on the robot's yaw joints, one row per physics step: each segment
+    of ``segment`` metres takes the wave's slope at its centre, each joint the difference of its two
+    segments' angles."""
+    steps = int(round(seconds * RATE))
+    return _core.sandfish_targets(os.fspath(robot), amplitude, wavelength, frequency, segment, steps)
 
 
 def run(
