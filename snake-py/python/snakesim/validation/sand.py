@@ -15,6 +15,8 @@ import math
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from snakesim.media import probe, rft_alpha
 from snakesim.validation import Case, Result, relative
 from snakesim.validation.simulate import RATE, ROBOTS, run, sandfish_targets
@@ -74,6 +76,59 @@ def _probe(beta: float, gamma: float) -> Result:
         simulated=measured,
         tolerance="2 % (vector difference)",
         passed=error <= 0.02,
+    )
+
+
+#: Two 1 kg half-cubes (0.05 x 0.1 x 0.1 m) joined by a yaw joint held straight: a 10 cm cube of 2 kg.
+HALVES = """<?xml version="1.0"?>
+<robot name="halves">
+  <link name="a">
+    <inertial><mass value="1.0"/>
+      <inertia ixx="0.00167" ixy="0" ixz="0" iyy="0.00104" iyz="0" izz="0.00104"/></inertial>
+    <collision><geometry><box size="0.05 0.1 0.1"/></geometry></collision>
+  </link>
+  <link name="b">
+    <inertial><origin xyz="-0.025 0 0"/><mass value="1.0"/>
+      <inertia ixx="0.00167" ixy="0" ixz="0" iyy="0.00104" iyz="0" izz="0.00104"/></inertial>
+    <collision><origin xyz="-0.025 0 0"/><geometry><box size="0.05 0.1 0.1"/></geometry></collision>
+  </link>
+  <joint name="j" type="revolute">
+    <parent link="a"/><child link="b"/><origin xyz="-0.025 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="100" velocity="5"/>
+  </joint>
+</robot>
+"""
+
+
+def _drop_energy() -> Result:
+    """A 2 kg, 10 cm cube released at rest with its bottom on the surface sinks until the law's work
+    equals the potential energy it lost (RFT is plastic: no rebound): with the bottom's stress
+    zeta d (alpha_z(0, pi/2) = 1) and the sides' zeta alpha_z(pi/2, pi/2) d (0.128; the two halves'
+    touching faces count as sides, the elements do not remove hidden surfaces, perimeter 0.6 m),
+    zeta A d / 2 + zeta 0.128 P d^2 / 6 = m g."""
+    zeta, area, perimeter, mass, g = 2.0e5, 0.01, 0.6, 2.0, 9.81
+    side = 0.206 - 0.169 - 0.212 + 0.358 - 0.055
+    a, b = zeta * side * perimeter / 6.0, zeta * area / 2.0
+    published = (-b + math.sqrt(b * b + 4.0 * a * mass * g)) / (2.0 * a)
+    with tempfile.TemporaryDirectory() as folder:
+        robot = Path(folder) / "halves.urdf"
+        robot.write_text(HALVES)
+        world = Path(folder) / "sand.yaml"
+        world.write_text(
+            "media:\n  - {medium: granular, area: [-1, -1, 1, 1], depth: 0.3, zeta: 2.0e5, friction: 0.2, "
+            "element: 0.005}\n"
+        )
+        base = run(robot, np.zeros((720, 1)), world, (0.0, 0.0, 0.05, 0.0))
+    simulated = float(0.05 - base[-1, 2])
+    return Result(
+        name="sand.drop-energy",
+        quantity="resting depth of a 2 kg, 10 cm cube released on the surface",
+        published=published,
+        unit="m",
+        source=f"{LI}, the law's work = m g d (energy balance)",
+        simulated=simulated,
+        tolerance="3 %",
+        passed=relative(simulated, published) <= 0.03,
     )
 
 
@@ -157,6 +212,7 @@ def _efficiency_peak() -> Result:
 
 CASES = [
     Case("sand.alpha-z-plate-down", True, _alpha_z_plate_down),
+    Case("sand.drop-energy", True, _drop_energy),
     *(
         Case(f"sand.probe-beta{b:g}-gamma{g:g}", True, lambda b=b, g=g: _probe(b, g))
         for b, g in ((0.0, 90.0), (30.0, 45.0), (-45.0, 20.0), (90.0, 0.0))
