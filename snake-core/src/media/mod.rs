@@ -145,7 +145,9 @@ impl MediaState {
             .min_by(f64::total_cmp);
         let links = links
             .into_iter()
-            .map(|(mass, shapes)| LinkGeometry::new(mass, shapes, element, "media: element"))
+            .map(|(mass, shapes)| {
+                LinkGeometry::new(mass, shapes, element, "the world file's media: element")
+            })
             .collect::<Result<Vec<_>>>()?;
         // Water acts on a link through its volume: a link without one would float through it.
         if media.iter().any(|m| matches!(m, Medium::Water(_))) {
