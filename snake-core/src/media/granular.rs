@@ -519,4 +519,41 @@ mod tests {
             assert!(err.contains(&format!("media[0]: {key}")), "{err}");
         }
     }
+
+    #[test]
+    fn a_world_file_reads_its_granular_media_once_and_refuses_them_off_the_plane() {
+        use crate::WorldSpec;
+        let dir = std::path::Path::new(".");
+        let ok = "media:\n  - {medium: granular, area: [-1, -1, 1, 1], depth: 0.3, zeta: 2.0e5, friction: 0.2,\n     coefficients: {A00: 1, A10: 0, B11: 0, B01: 0, B-11: 0, C11: 0, C01: 0, C-11: 0, D10: 0}}\n";
+        let spec = WorldSpec::parse(ok, "w.yaml", dir).unwrap();
+        assert!(spec.has_granular() && !spec.is_flat_plane());
+        let crate::media::Medium::Granular(g) = &spec.media[0] else {
+            panic!("granular")
+        };
+        assert_eq!(
+            (g.coefficients.a00, g.element, g.elastic),
+            (1.0, 0.01, 0.002)
+        );
+        for (text, expect) in [
+            (
+                "ground: {slope: {degrees: 5}}\nmedia: [{medium: granular, area: [0, 0, 1, 1], depth: 0.1, zeta: 1.0e5, friction: 0.2}]\n",
+                "w.yaml: media: a granular medium needs the plane ground",
+            ),
+            (
+                "media: [{medium: granular, area: [0, 0, 1, 1], depth: 0.1, zeta: 1.0e5, friction: 0.2, coefficients: {A00: 1}}]\n",
+                "w.yaml",
+            ),
+            (
+                "media: [{medium: granular, area: [0, 0, 1, 1], depth: 0.1, zeta: 1.0e5}]\n",
+                "friction",
+            ),
+            (
+                "media: [{medium: granular, area: [0, 0, 1, 1], depth: 0.1, zeta: .inf, friction: 0.2}]\n",
+                "w.yaml",
+            ),
+        ] {
+            let err = WorldSpec::parse(text, "w.yaml", dir).unwrap_err().to_string();
+            assert!(err.contains(expect) && !err.contains('\n'), "{err}");
+        }
+    }
 }
