@@ -187,6 +187,60 @@ impl LinkGeometry {
     }
 }
 
+impl Primitive {
+    /// Whether `p` (in the shape's own frame) lies inside the shape or within `tolerance` of it.
+    pub fn contains(&self, p: &Vector3<f64>, tolerance: f64) -> bool {
+        match *self {
+            Primitive::Box(h) => (0..3).all(|k| p[k].abs() <= h[k] + tolerance),
+            Primitive::Cylinder { radius, length } => {
+                p.z.abs() <= 0.5 * length + tolerance && p.x.hypot(p.y) <= radius + tolerance
+            }
+            Primitive::Capsule { radius, length } => {
+                let z = p.z.clamp(-0.5 * length, 0.5 * length);
+                (p - Vector3::new(0.0, 0.0, z)).norm() <= radius + tolerance
+            }
+            Primitive::Sphere(r) => p.norm() <= r + tolerance,
+        }
+    }
+}
+
+/// Drops every element that lies inside another link's shape (within `tolerance`) with the body as it
+/// stands: the faces where a chain's segments meet are inside the body (a suit covers them, a joint
+/// hides them), and as surfaces they would take the grains' full stress head-on. `poses` are the links'
+/// centre-of-mass poses (world frame), one per link.
+pub fn hide_inner_elements(links: &mut [LinkGeometry], poses: &[Pose], tolerance: f64) {
+    let placed: Vec<Vec<(Primitive, Pose)>> = links
+        .iter()
+        .zip(poses)
+        .map(|(l, com)| {
+            l.shapes
+                .iter()
+                .map(|s| {
+                    (
+                        s.primitive,
+                        Pose {
+                            position: com.position + com.orientation * s.pose.position,
+                            orientation: com.orientation * s.pose.orientation,
+                        },
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    for (k, (link, com)) in links.iter_mut().zip(poses).enumerate() {
+        link.elements.retain(|el| {
+            let at = com.position + com.orientation * el.point;
+            !placed.iter().enumerate().any(|(j, shapes)| {
+                j != k
+                    && shapes.iter().any(|(primitive, pose)| {
+                        let local = pose.orientation.inverse() * (at - pose.position);
+                        primitive.contains(&local, tolerance)
+                    })
+            })
+        });
+    }
+}
+
 /// Checks an element size: finite and within [`MEDIUM_ELEMENT`].
 pub fn check_element_size(what: &str, e: f64) -> Result<()> {
     crate::limits::check_range(what, e, MEDIUM_ELEMENT.0, MEDIUM_ELEMENT.1)

@@ -108,6 +108,10 @@ impl std::ops::AddAssign for Wrench {
     }
 }
 
+/// How close to another link's shape a surface element may lie and still count as inside it, metres:
+/// the faces where two segments meet touch to rounding, and a joint's gap is under a millimetre.
+pub const INNER_TOLERANCE: f64 = 1.0e-3;
+
 /// What a medium keeps of one link between physics steps (one per medium and link, starting empty).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LinkMemory {
@@ -186,7 +190,21 @@ impl MediaState {
                 .collect();
             links.push((mass, placed));
         }
-        Self::new(media, links, world.time_step())
+        let mut state = Self::new(media, links, world.time_step())?;
+        if let Some(s) = &mut state {
+            // The faces where links meet are inside the body: no medium acts on them.
+            let poses: Vec<Pose> = Self::states(world, body)?
+                .into_iter()
+                .map(|l| l.pose)
+                .collect();
+            geometry::hide_inner_elements(&mut s.links, &poses, INNER_TOLERANCE);
+            for per_medium in &mut s.memory {
+                for m in per_medium.iter_mut() {
+                    m.elements.clear();
+                }
+            }
+        }
+        Ok(state)
     }
 
     /// Sets each link's water coefficients (a robot file's `water` keys, checked; the base first).

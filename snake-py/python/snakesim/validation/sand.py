@@ -103,10 +103,10 @@ HALVES = """<?xml version="1.0"?>
 def _drop_energy() -> Result:
     """A 2 kg, 10 cm cube released at rest with its bottom on the surface sinks until the law's work
     equals the potential energy it lost (RFT is plastic: no rebound): with the bottom's stress
-    zeta d (alpha_z(0, pi/2) = 1) and the sides' zeta alpha_z(pi/2, pi/2) d (0.128; the two halves'
-    touching faces count as sides, the elements do not remove hidden surfaces, perimeter 0.6 m),
+    zeta d (alpha_z(0, pi/2) = 1) and the sides' zeta alpha_z(pi/2, pi/2) d (0.128; perimeter 0.4 m:
+    the halves' touching faces are inside the body and take nothing),
     zeta A d / 2 + zeta 0.128 P d^2 / 6 = m g."""
-    zeta, area, perimeter, mass, g = 2.0e5, 0.01, 0.6, 2.0, 9.81
+    zeta, area, perimeter, mass, g = 2.0e5, 0.01, 0.4, 2.0, 9.81
     side = 0.206 - 0.169 - 0.212 + 0.358 - 0.055
     a, b = zeta * side * perimeter / 6.0, zeta * area / 2.0
     published = (-b + math.sqrt(b * b + 4.0 * a * mass * g)) / (2.0 * a)
