@@ -22,9 +22,11 @@ use crate::error::invalid;
 use crate::limits::{MAX_NESTING, MAX_XML_ATTRIBUTES};
 use crate::Result;
 
-/// Reads at most `cap` bytes of the regular file `path`; `what` names it in errors (e.g. "robot
-/// file"). Refuses a device, FIFO or socket and a larger file in one line.
-pub fn read_bytes(path: &Path, cap: u64, what: &str) -> Result<Vec<u8>> {
+/// Opens the regular file `path` for reading, if it has at most `cap` bytes, and remembers it as an
+/// input; `what` names it in errors (e.g. "robot file"). Refuses a directory, a device, FIFO or socket
+/// and a larger file in one line. For a reader that reads a line at a time ([`crate::tables`]); the
+/// caller still stops at `cap` bytes, since a file may grow while read.
+pub fn open_regular(path: &Path, cap: u64, what: &str) -> Result<std::fs::File> {
     let shown = path.display();
     let cannot = |e: std::io::Error| invalid(format!("{what} {shown}: cannot read: {e}"));
     // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer.
@@ -46,7 +48,16 @@ pub fn read_bytes(path: &Path, cap: u64, what: &str) -> Result<Vec<u8>> {
     if meta.len() > cap {
         return Err(too_large(what, path, meta.len(), cap));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    Ok(file)
+}
+
+/// Reads at most `cap` bytes of the regular file `path`; `what` names it in errors (e.g. "robot
+/// file"). Refuses a device, FIFO or socket and a larger file in one line.
+pub fn read_bytes(path: &Path, cap: u64, what: &str) -> Result<Vec<u8>> {
+    let file = open_regular(path, cap, what)?;
+    let cannot =
+        |e: std::io::Error| invalid(format!("{what} {}: cannot read: {e}", path.display()));
+    let mut bytes = Vec::with_capacity(file.metadata().map_err(cannot)?.len() as usize);
     file.take(cap + 1).read_to_end(&mut bytes).map_err(cannot)?;
     if bytes.len() as u64 > cap {
         return Err(too_large(what, path, bytes.len() as u64, cap));

@@ -52,6 +52,7 @@ pub mod robot;
 pub mod run_targets;
 pub mod skin;
 pub mod snake;
+pub mod tables;
 pub mod urdf;
 pub mod vec_env;
 pub mod world;

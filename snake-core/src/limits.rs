@@ -206,6 +206,9 @@ pub const MAX_CONFIG_BYTES: u64 = 16 << 20;
 /// (1 GiB).
 pub const MAX_CSV_BYTES: u64 = 1 << 30;
 
+/// Longest line of a targets or log CSV, characters (a row of 137 numbers in shortest form is ~3 kB).
+pub const MAX_CSV_LINE_CHARS: usize = 1 << 20;
+
 /// Longest error message shown, characters (defined beside the errors, which every module uses).
 pub use crate::error::MAX_ERROR_CHARS;
 
@@ -440,6 +443,7 @@ pub const ALL: &[(&str, LimitValue)] = {
         ("model_bytes", Int(MAX_MODEL_BYTES)),
         ("config_bytes", Int(MAX_CONFIG_BYTES)),
         ("csv_bytes", Int(MAX_CSV_BYTES)),
+        ("csv_line_chars", Int(MAX_CSV_LINE_CHARS as u64)),
         ("nesting", Int(MAX_NESTING as u64)),
         ("xml_attributes", Int(MAX_XML_ATTRIBUTES as u64)),
         ("media", Int(MAX_MEDIA as u64)),

@@ -210,8 +210,58 @@ fn world_files(world_path: PathBuf) -> PyResult<Vec<OsString>> {
     ))
 }
 
-/// Adds `simulate_robot`, `fitted_robot_file`, `robot_joint_names`, `robot_files` and `world_files` to the module.
+/// read_targets(path, joints) -> float64 (steps, joints): a targets CSV in the order of `joints` (the
+/// robot's movable joints), parsed by snake-core's `tables` as `snake-cli run --targets` reads it, under
+/// the same limits. ValueError naming the file and line.
+#[pyfunction]
+fn read_targets<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    joints: Vec<String>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let names: Vec<&str> = joints.iter().map(String::as_str).collect();
+    let table = snake_core::tables::read_targets(&path, &names).map_err(to_py)?;
+    table_array(py, table)
+}
+
+/// read_log(path, joints, steps, dt) -> (values, velocities): a log CSV of `steps` physics steps of
+/// `dt` s by a robot with `joints` movable joints, parsed by snake-core's `tables`: float64 (steps, 7 +
+/// joints) after `step` and `t` (base pose, joints), or (steps, 13 + 2 joints) with the velocity
+/// columns, and whether it holds them. ValueError naming the file and line.
+#[pyfunction]
+fn read_log<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    joints: usize,
+    steps: usize,
+    dt: f64,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, bool)> {
+    let log = snake_core::tables::read_log(&path, joints, steps, dt).map_err(to_py)?;
+    Ok((table_array(py, log.table)?, log.velocities))
+}
+
+/// log_columns(joints, velocities) -> the header of a log (`snake-cli run --output`).
+#[pyfunction]
+fn log_columns(joints: usize, velocities: bool) -> Vec<String> {
+    snake_core::tables::log_columns(joints, velocities)
+}
+
+fn table_array(
+    py: Python<'_>,
+    table: snake_core::tables::Table,
+) -> PyResult<Bound<'_, PyArray2<f64>>> {
+    let (rows, columns) = (table.rows, table.columns);
+    numpy::PyArray1::from_vec(py, table.values)
+        .reshape([rows, columns])
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// Adds `simulate_robot`, `fitted_robot_file`, `robot_joint_names`, `robot_files`, `world_files`,
+/// `read_targets`, `read_log` and `log_columns` to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_targets, m)?)?;
+    m.add_function(wrap_pyfunction!(read_log, m)?)?;
+    m.add_function(wrap_pyfunction!(log_columns, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_robot, m)?)?;
     m.add_function(wrap_pyfunction!(fitted_robot_file, m)?)?;
     m.add_function(wrap_pyfunction!(robot_joint_names, m)?)?;

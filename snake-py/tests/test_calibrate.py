@@ -166,11 +166,11 @@ def _run(args, tmp_path, capsys):
         ("cells", "cells, the header has"),
         ("unsorted", "expected 1 (rows sorted"),
         # t is read and checked: a number, step/240 s to the millisecond.
-        ("banana", ":6: t: 'banana' is not a number"),
-        ("late", ":6: t: '0.025', expected step 5 x 1/240 s"),
+        ("banana", ':6: t: "banana" is not a number'),
+        ("late", ':6: t: "0.025", expected step 5 x 1/240 s'),
         # Values beyond LIMITS['position'] (a 1e300 made every candidate's error overflow).
-        ("absurd", ":6: base_x: '1e300' is beyond +-10000"),
-        ("absurd_joint", ":6: q3: '-2e4' is beyond +-10000"),
+        ("absurd", ':6: base_x: "1e300" is beyond +-10000'),
+        ("absurd_joint", ':6: q3: "-2e4" is beyond +-10000'),
     ],
 )
 def test_bad_logs_are_one_line(logged, tmp_path, capsys, change, expected):
@@ -246,7 +246,7 @@ def test_targets_that_do_not_match_the_robot(logged, tmp_path, capsys):
 @pytest.mark.parametrize(
     ("change", "expected"),
     [
-        ("nan", "yaw2: 'inf' is not a finite number"),
+        ("nan", 'yaw2: "inf" is not a finite number'),
         ("unsorted", "expected 1 (rows sorted"),
         ("step", "the first column must be 'step'"),
         ("huge", "csv_bytes"),
@@ -550,7 +550,7 @@ def _write_run(folder: Path, rows: int) -> tuple[Path, Path]:
         f.write(",".join(["step", *names]) + "\n")
         f.writelines(f"{k},0.3,-0.3,0.3,-0.3,0.3\n" for k in range(1, rows + 1))
     with open(log, "w") as f:
-        f.write(",".join([*calibration.BASE_COLUMNS, *(f"q{j}" for j in range(len(names)))]) + "\n")
+        f.write(",".join(_core.log_columns(len(names), False)) + "\n")
         f.writelines(f"{k},{k / 240!r},0,0,0.25,0,0,0,1,0,0,0,0,0\n" for k in range(1, rows + 1))
     return targets, log
 

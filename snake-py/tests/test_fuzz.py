@@ -12,10 +12,9 @@ from pathlib import Path
 import numpy as np
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
-from snakesim import SnakeEnv, agents
+from snakesim import SnakeEnv, _core, agents
 from snakesim.envs.config import ENV_KEYWORDS
 from snakesim.runs.calibrate import (
-    BASE_COLUMNS,
     FIT_KEYS,
     CalibrationError,
     parse_fit,
@@ -279,7 +278,7 @@ CALIBRATION_JOINTS = ["yaw0", "pitch1", "yaw2"]
 def _calibration_csvs() -> tuple[bytes, bytes]:
     """A targets table and a log (``snake-cli run --output``'s columns) of three steps of three joints."""
     targets = ["step," + ",".join(CALIBRATION_JOINTS)]
-    log = [",".join([*BASE_COLUMNS, "q0", "q1", "q2"])]
+    log = [",".join(_core.log_columns(3, False))]
     for k in range(1, 4):
         targets.append(f"{k},0.{k},-0.{k},0")
         log.append(f"{k},{k / 240!r},0.0{k},0,0.025,0,0,0,1,0.01,-0.0{k},1e-3")

@@ -38,16 +38,13 @@ at once (:func:`_stop_workers`).
 from __future__ import annotations
 
 import concurrent.futures
-import contextlib
-import io
 import json
 import math
 import multiprocessing
 import os
 import signal
 import time
-from array import array
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -55,7 +52,7 @@ from typing import Any
 import numpy as np
 
 from snakesim import _core
-from snakesim.files import open_regular, read_text
+from snakesim.files import read_text
 from snakesim.limits import LIMITS
 from snakesim.runs.arguments import ArgumentError, Keyword
 from snakesim.runs.calibrate_intervals import delta_for, intervals
@@ -89,15 +86,8 @@ NOT_IN_ROBOT_FILE = ("ground_friction", "lateral_friction", "mass_scale")
 MAX_EVALS = LIMITS["calibration_evals"]
 POSITION_SCALE = 0.01  # m
 ANGLE_SCALE = 0.001  # rad
-BASE_COLUMNS = ("step", "t", "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
-VELOCITY_COLUMNS = ("base_vx", "base_vy", "base_vz", "base_wx", "base_wy", "base_wz")
 #: The physics step, s: a log and its targets have one row per step.
 DT = 1.0 / 240.0
-#: Most a log's ``t`` may differ from step x DT, s: time stamps written to the millisecond pass; a row a
-#: step early or late (4.2 ms) does not.
-T_TOLERANCE = 1e-3
-#: Longest line of a targets or log CSV, characters (a row of 137 numbers in shortest form is ~3 kB).
-LINE_CHARS = 1 << 20
 
 
 class CalibrationError(ArgumentError):
@@ -140,187 +130,40 @@ def parse_fit(items: Sequence[str]) -> dict[str, tuple[float, float]]:
     return bounds
 
 
-def excerpt(text: str) -> str:
-    """A user's value quoted for a message: at most 24 characters, escaped."""
-    return repr(text[:24]) + ("..." if len(text) > 24 else "")
-
-
-def _numbers(cells: list[str], file: str, line: int, names: Sequence[str], bound: float) -> list[float]:
-    """The cells as floats of magnitude at most ``bound`` (any finite value for ``math.inf``)."""
+def _read_table(read: Callable[[], Any], what: Keyword) -> Any:
+    """A table read by snake-core's ``tables`` (the one parser of targets and logs, under one set of
+    limits, as ``snake-cli run`` reads them); its error as a CalibrationError naming the argument."""
     try:
-        values = [float(c) for c in cells]
-        if all(math.isfinite(v) and abs(v) <= bound for v in values):
-            return values
-    except ValueError:
-        pass
-    for name, cell in zip(names, cells):
-        try:
-            v = float(cell)
-        except ValueError:
-            raise CalibrationError(f"{file}:{line}: {name}: {excerpt(cell)} is not a number") from None
-        if not math.isfinite(v):
-            raise CalibrationError(f"{file}:{line}: {name}: {excerpt(cell)} is not a finite number")
-        if abs(v) > bound:
-            raise CalibrationError(
-                f"{file}:{line}: {name}: {excerpt(cell)} is beyond +-{bound:g} (LIMITS['position'])"
-            )
-    raise AssertionError("unreachable: some cell was refused")
-
-
-def _lines(path: str | os.PathLike, what: Keyword) -> Iterator[tuple[int, list[str]]]:
-    """(line number, stripped cells) of each non-blank line of a CSV, read a line at a time: a regular
-    file of at most ``LIMITS['csv_bytes']``, UTF-8, lines of at most :data:`LINE_CHARS`;
-    CalibrationError naming the file (and line) otherwise."""
-    file = os.fspath(path)
-    try:
-        raw = open_regular(path, "csv_bytes")
-    except (OSError, ValueError) as error:
-        raise CalibrationError(what, f" {file}: {getattr(error, 'strerror', None) or error}") from None
-    cap = LIMITS["csv_bytes"]
-    with io.TextIOWrapper(raw, encoding="utf-8") as f:
-        line, read = 0, 0
-        while True:
-            try:
-                text = f.readline(LINE_CHARS)
-            except UnicodeDecodeError as error:
-                raise CalibrationError(
-                    what, f" {file}: not UTF-8 text ({error.reason}, after line {line})"
-                ) from None
-            if not text:
-                return
-            line += 1
-            read += len(text)
-            if len(text) == LINE_CHARS and not text.endswith("\n"):
-                raise CalibrationError(f"{file}:{line}: a line longer than {LINE_CHARS:,} characters")
-            if read > cap:  # the file grew while read
-                raise CalibrationError(f"{what} {file}: more than {cap:,} bytes (LIMITS['csv_bytes'])")
-            if text.strip():
-                yield line, [c.strip() for c in text.split(",")]
-
-
-def _header(lines: Iterator[tuple[int, list[str]]], file: str) -> tuple[int, list[str]]:
-    first = next(lines, None)
-    if first is None:
-        raise CalibrationError(f"{file}: empty; expected a header")
-    return first
-
-
-def _row(file: str, line: int, cells: list[str], header: list[str], k: int) -> None:
-    """Row ``k`` (from 1) has the header's cells and step ``k``."""
-    if len(cells) != len(header):
-        raise CalibrationError(f"{file}:{line}: {len(cells)} cells, the header has {len(header)}")
-    if cells[0] != str(k):
-        raise CalibrationError(
-            f"{file}:{line}: step {excerpt(cells[0])}, expected {k} "
-            "(rows sorted, one per physics step, from 1)"
-        )
+        return read()
+    except ValueError as error:
+        message = str(error)
+        # "targets FILE: ...": the argument named, so that the command can name its flag instead.
+        if message.startswith(f"{what.name} "):
+            raise CalibrationError(what, message[len(what.name) :]) from None
+        raise CalibrationError(message) from None
 
 
 def read_targets(path: str | os.PathLike, joints: Sequence[str]) -> np.ndarray:
     """The targets CSV as (steps, joints) in the robot's joint order: at most
-    ``LIMITS['target_rows']`` rows of finite numbers, as ``snake-cli run --targets`` reads them
-    (refused at the first row over, before the rest is read)."""
-    file = os.fspath(path)
-    cap = LIMITS["target_rows"]
-    values = array("d")
-    with contextlib.closing(_lines(path, TARGETS)) as lines:
-        first, header = _header(lines, file)
-        if header[0] != "step":
-            raise CalibrationError(f"{file}:{first}: the first column must be 'step'")
-        names = header[1:]
-        for n in names:
-            if n not in joints:
-                raise CalibrationError(
-                    f"{file}:{first}: column {excerpt(n)} is not a movable joint of the robot"
-                )
-        if sorted(names) != sorted(joints):
-            missing = [j for j in joints if j not in names]
-            raise CalibrationError(
-                f"{file}:{first}: no column (or two) for joint(s) {', '.join(missing) or names}"
-            )
-        k = 0
-        for line, cells in lines:
-            k += 1
-            if k > cap:
-                raise CalibrationError(
-                    f"{file}:{line}: more than {cap:,} rows (LIMITS['target_rows']: an hour of 1/240 s "
-                    "steps, as snake-cli run --targets)"
-                )
-            _row(file, line, cells, header, k)
-            values.extend(_numbers(cells[1:], file, line, names, math.inf))
-    if k == 0:
-        raise CalibrationError(f"{file}: no rows after the header")
-    data = np.frombuffer(values, dtype=np.float64).reshape(k, len(names))
-    order = [names.index(j) for j in joints]
-    return np.ascontiguousarray(data[:, order])
+    ``LIMITS['target_rows']`` rows of finite numbers, read as ``snake-cli run --targets`` reads them
+    (snake-core's ``tables``; refused at the first row over, before the rest is read)."""
+    return _read_table(lambda: _core.read_targets(os.fspath(path), list(joints)), TARGETS)
 
 
 def velocity_columns(joints: int) -> list[str]:
     """The optional velocity columns of a log: the base's world-frame linear and angular velocity
     (``getBaseVelocity``) and the joint velocities."""
-    return [*VELOCITY_COLUMNS, *(f"qd{j}" for j in range(joints))]
+    return _core.log_columns(joints, True)[len(_core.log_columns(joints, False)) :]
 
 
 def read_log(path: str | os.PathLike, joints: int, steps: int) -> np.ndarray:
     """The logged trajectory as (steps, 7 + joints): base x, y, z, qx, qy, qz, qw, then the joints;
     (steps, 13 + 2 joints) when the log also holds the velocities (:func:`velocity_columns`, all of
-    them after the joints, or none). Row k is step k at ``t`` = k/240 s (within :data:`T_TOLERANCE`),
-    every value at most ``LIMITS['position']`` in magnitude; a row past ``steps`` is refused before
-    the rest is read."""
-    file = os.fspath(path)
-    bound = float(LIMITS["position"])
-    values = array("d")
-    expected = [*BASE_COLUMNS, *(f"q{j}" for j in range(joints))]
-    with contextlib.closing(_lines(path, LOG)) as lines:
-        first, header = _header(lines, file)
-        if header != expected and header[: len(expected)] == expected:
-            extra, wanted = header[len(expected) :], velocity_columns(joints)
-            missing = [c for c in wanted if c not in extra]
-            unknown = [c for c in extra if c not in wanted]
-            if unknown:
-                raise CalibrationError(
-                    f"{file}:{first}: column {excerpt(unknown[0])} is not a log column (after the joints "
-                    f"only the velocities {','.join(wanted[:7])},... may follow)"
-                )
-            if missing:
-                raise CalibrationError(
-                    f"{file}:{first}: the log has velocity columns but lacks {', '.join(missing)} "
-                    "(give every velocity column or none; without them they are estimated)"
-                )
-            if extra != wanted:
-                raise CalibrationError(f"{file}:{first}: expected the velocity columns as {','.join(wanted)}")
-            expected = header
-        if header != expected:
-            q = sum(1 for h in header if h.startswith("q") and h[1:].isdigit())
-            if header[: len(BASE_COLUMNS)] == list(BASE_COLUMNS) and q != joints:
-                raise CalibrationError(
-                    f"{file}:{first}: {q} joint columns, the robot has {joints} movable joints"
-                )
-            raise CalibrationError(
-                f"{file}:{first}: expected the header {','.join(expected[:10])},... (snake-cli run --output)"
-            )
-        names = header[2:]
-        k = 0
-        for line, cells in lines:
-            k += 1
-            if k > steps:
-                raise CalibrationError(
-                    f"{file}:{line}: more than {steps} rows, the targets have {steps} (one per physics step)"
-                )
-            _row(file, line, cells, header, k)
-            try:
-                t = float(cells[1])
-            except ValueError:
-                raise CalibrationError(f"{file}:{line}: t: {excerpt(cells[1])} is not a number") from None
-            if not abs(t - k * DT) <= T_TOLERANCE:
-                raise CalibrationError(
-                    f"{file}:{line}: t: {excerpt(cells[1])}, expected step {k} x 1/240 s = {k * DT:.6g} s "
-                    "(one row per physics step, t = 0 at the first command)"
-                )
-            values.extend(_numbers(cells[2:], file, line, names, bound))
-    if k != steps:
-        raise CalibrationError(f"{file}: {k} rows, the targets have {steps} (one per physics step)")
-    return np.frombuffer(values, dtype=np.float64).reshape(k, len(names))
+    them after the joints, or none). Row k is step k at ``t`` = k/240 s (within 1 ms), every value at
+    most ``LIMITS['position']`` in magnitude; a row past ``steps`` is refused before the rest is read
+    (snake-core's ``tables``, the parser of ``snake-cli run``'s logs)."""
+    values, _ = _read_table(lambda: _core.read_log(os.fspath(path), joints, steps, DT), LOG)
+    return values
 
 
 def trajectory_error(base: np.ndarray, joints: np.ndarray, log: np.ndarray) -> float:
