@@ -91,7 +91,7 @@ impl Primitive {
         }
     }
 
-    /// How many elements [`elements`] cuts the surface into at size `e`, in floating point (so that
+    /// How many elements [`elements_of`] cuts the surface into at size `e`, in floating point (so that
     /// a size far too small is refused before anything is allocated).
     pub fn element_count(&self, e: f64) -> f64 {
         use std::f64::consts::PI;
