@@ -32,8 +32,11 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 
 #: The pages whose examples run: the README, docs/ and the model cards.
-PAGES = ["README.md", *(f"docs/{p.name}" for p in sorted((REPO / "docs").glob("*.md"))),
-         *(f"models/{p.name}" for p in sorted((REPO / "models").glob("*.md")))]
+PAGES = [
+    "README.md",
+    *(f"docs/{p.name}" for p in sorted((REPO / "docs").glob("*.md"))),
+    *(f"models/{p.name}" for p in sorted((REPO / "models").glob("*.md"))),
+]
 
 RUN_LANGUAGES = {"sh": "sh", "bash": "sh", "python": "python"}
 FENCE = re.compile(r"^(\s*)```(\S*)\s*$")
@@ -95,7 +98,7 @@ def blocks(page: str) -> list[Block]:
         i += 1
         body = []
         while i < len(lines) and lines[i].strip() != "```":
-            body.append(lines[i][len(indent):] if lines[i].startswith(indent) else lines[i])
+            body.append(lines[i][len(indent) :] if lines[i].startswith(indent) else lines[i])
             i += 1
         i += 1
         if language not in RUN_LANGUAGES:
@@ -175,7 +178,7 @@ def shorten(command: str) -> str:
 def split_comment(command: str) -> tuple[str, str]:
     """A command and its trailing `# comment` (the docs quote no `#`)."""
     match = re.search(r"\s+#.*$", command)
-    return (command[: match.start()], command[match.start():]) if match else (command.rstrip(), "")
+    return (command[: match.start()], command[match.start() :]) if match else (command.rstrip(), "")
 
 
 def with_flag(body: str, flag: str, value: str, append: bool = True) -> str:
@@ -201,9 +204,27 @@ def tiny_training(body: str) -> str:
 
 #: What a block may read, linked into its folder; what it writes (out/, runs/, sweeps/, docs/figures/)
 #: stays in the folder.
-LINKED = [".venv", "target", "models", "robots", "worlds", "experiments", "scripts", "tests", "snake-py",
-          "snake-core", "snake-rl", "snake-cli", "bullet-sys", "fuzz", "Cargo.toml", "Cargo.lock",
-          "requirements.lock", "requirements-test.lock", "README.md"]
+LINKED = [
+    ".venv",
+    "target",
+    "models",
+    "robots",
+    "worlds",
+    "experiments",
+    "scripts",
+    "tests",
+    "snake-py",
+    "snake-core",
+    "snake-rl",
+    "snake-cli",
+    "bullet-sys",
+    "fuzz",
+    "Cargo.toml",
+    "Cargo.lock",
+    "requirements.lock",
+    "requirements-test.lock",
+    "README.md",
+]
 #: A block's time limit, seconds (a shortened block takes a few).
 TIMEOUT = None if FULL else 240
 #: At most this many blocks are not run; each says why.
@@ -259,13 +280,16 @@ def run(block: Block, root: Path, text: str) -> None:
         script.write_text("set -eo pipefail\n" + SERVE_CHECK + text)
         command = ["bash", script.name]
     try:
-        done = subprocess.run(command, cwd=root, env=environment(root), capture_output=True, text=True,
-                              timeout=TIMEOUT)
+        done = subprocess.run(
+            command, cwd=root, env=environment(root), capture_output=True, text=True, timeout=TIMEOUT
+        )
     except subprocess.TimeoutExpired as e:
         pytest.fail(f"{block.name} ran over {TIMEOUT} s:\n{text}\n{e.stdout}\n{e.stderr}")
     if done.returncode != 0:
-        pytest.fail(f"{block.name} failed (exit {done.returncode}):\n--- as run:\n{text}\n--- stdout:\n"
-                    f"{done.stdout[-3000:]}\n--- stderr:\n{done.stderr[-3000:]}")
+        pytest.fail(
+            f"{block.name} failed (exit {done.returncode}):\n--- as run:\n{text}\n--- stdout:\n"
+            f"{done.stdout[-3000:]}\n--- stderr:\n{done.stderr[-3000:]}"
+        )
 
 
 #: The pages of snake-py/tests/test_doc_examples_more.py (the rest: test_doc_examples.py), two files so

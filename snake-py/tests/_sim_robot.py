@@ -27,8 +27,12 @@ class SimRobot:
         kwargs = dict(meta["snakesim.env_kwargs"])
         steps = meta["snakesim.physics_steps_per_env_step"]
         limit = snakesim.envs.env.make_env(**kwargs).config["max_episode_steps"] * steps
-        kwargs.update(action={"mode": "joints"}, action_scale=self.SCALE, physics_steps_per_env_step=1,
-                      max_episode_steps=limit)
+        kwargs.update(
+            action={"mode": "joints"},
+            action_scale=self.SCALE,
+            physics_steps_per_env_step=1,
+            max_episode_steps=limit,
+        )
         self.env = snakesim.envs.env.make_env(**kwargs)
         self.obs, _ = self.env.reset(seed=seed)
         self.done = False
@@ -44,7 +48,7 @@ class SimRobot:
     def read_parts(self) -> dict[str, np.ndarray]:
         parts, start = {}, 0
         for name, size in self.env.observation_structure.items():
-            parts[name] = self.obs[start:start + size]
+            parts[name] = self.obs[start : start + size]
             start += size
         return parts
 

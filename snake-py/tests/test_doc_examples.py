@@ -49,8 +49,10 @@ def test_the_collector_finds_the_examples_and_their_markers():
 
 #: A command and what the test runs instead.
 SHORTENED = [
-    ("snakesim evaluate m.safetensors --episodes 100 --seed 9  # x",
-     "snakesim evaluate m.safetensors --episodes 1 --seed 9  # x"),
+    (
+        "snakesim evaluate m.safetensors --episodes 100 --seed 9  # x",
+        "snakesim evaluate m.safetensors --episodes 1 --seed 9  # x",
+    ),
     (".venv/bin/snakesim evaluate baseline:steer", ".venv/bin/snakesim evaluate baseline:steer --episodes 1"),
     ("snakesim replay m --episodes 3 --out a.png", "snakesim replay m --episodes 1 --out a.png --seconds 2"),
     ("snake-cli bench --joints 5,10", "snake-cli bench --joints 5,10 --repeats 1 --steps 240"),

@@ -205,8 +205,11 @@ def test_a_gait_mode_model_lists_the_ranges_its_wave_reads(tmp_path, capsys):
     action = make_env(task="goal", joints=10).config["action"]
     assert action["mode"] == "gait"
     assert json.loads(meta["snakesim.action"]) == {
-        "mode": "gait", "steering": action["steering"], "amplitude": action["amplitude"],
-        "frequency": action["frequency"]}
+        "mode": "gait",
+        "steering": action["steering"],
+        "amplitude": action["amplitude"],
+        "frequency": action["frequency"],
+    }
 
 
 def test_exporting_a_native_model_imports_no_torch(tmp_path):

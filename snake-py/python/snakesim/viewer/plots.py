@@ -224,8 +224,9 @@ def plot_runs(
         if any(not label or len(label) > MAX_LABEL for label in labels):
             raise PlotError(f"a label must have 1 to {MAX_LABEL} characters")
         groups = [(label, members) for label, (_, members) in zip(labels, groups)]
-    fig, axes = plt.subplots(len(metrics), 1, sharex=True, figsize=(7.0, 4.5 + 2.5 * (len(metrics) - 1)),
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        len(metrics), 1, sharex=True, figsize=(7.0, 4.5 + 2.5 * (len(metrics) - 1)), squeeze=False
+    )
     drawn = []
     try:
         for panel, (ax,) in zip(metrics, axes):
