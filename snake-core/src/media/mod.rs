@@ -6,7 +6,9 @@
 //! bodies hold no [`MediaState`] then, and their step is the one call it always was).
 //!
 //! Layout: `region` (where a medium is), `geometry` (what a medium sees of a link: shapes and surface
-//! elements), `granular` (the granular medium, issue 59), `water` (water, issue 60); this file holds
+//! elements), `ground` (the rigid ground giving way under a granular medium), `probe` (Li et al.'s
+//! plate experiment, `snake-cli probe`), `granular` (the granular medium, issue 59), `water` (water,
+//! issue 60); this file holds
 //! the types every medium shares ([`LinkState`], [`Wrench`], [`LinkMemory`]) and the per-step
 //! application ([`MediaState::apply`]). docs/media.md has the laws and their validation.
 
@@ -256,7 +258,7 @@ impl MediaState {
             for (k, ((link, state), mem)) in self.links.iter().zip(states).zip(memory).enumerate() {
                 out[k] += match medium {
                     Medium::Granular(g) => g.wrench(link, state, self.dt, mem),
-                    Medium::Water(w) => water_wrench(w, link, state, self.dt, mem),
+                    Medium::Water(w) => w.wrench(link, state, self.dt, mem),
                 };
             }
         }
@@ -277,15 +279,4 @@ impl MediaState {
         }
         Ok(())
     }
-}
-
-/// Water's wrench on a link: zero until `water::Water::wrench` (issue 60) takes its place here.
-fn water_wrench(
-    water: &water::Water,
-    link: &LinkGeometry,
-    state: &LinkState,
-    dt: f64,
-    memory: &mut LinkMemory,
-) -> Wrench {
-    water.wrench(link, state, dt, memory)
 }
