@@ -10,7 +10,7 @@
 
 mod fitted_file;
 
-pub use fitted_file::fitted_robot_file;
+pub use fitted_file::{fitted_robot_file, NOT_IN_ROBOT_FILE};
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};

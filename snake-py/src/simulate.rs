@@ -257,8 +257,14 @@ fn table_array(
 }
 
 /// Adds `simulate_robot`, `fitted_robot_file`, `robot_joint_names`, `robot_files`, `world_files`,
-/// `read_targets`, `read_log` and `log_columns` to the module.
+/// `read_targets`, `read_log`, `log_columns` and `NOT_IN_ROBOT_FILE` (the fit keys a robot file cannot
+/// hold, from snake-core) to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let not_in_file: Vec<&str> = snake_core::run_targets::NOT_IN_ROBOT_FILE
+        .iter()
+        .map(|(k, _)| *k)
+        .collect();
+    m.add("NOT_IN_ROBOT_FILE", not_in_file)?;
     m.add_function(wrap_pyfunction!(read_targets, m)?)?;
     m.add_function(wrap_pyfunction!(read_log, m)?)?;
     m.add_function(wrap_pyfunction!(log_columns, m)?)?;

@@ -11,8 +11,9 @@ use crate::{RobotFile, RobotSpec};
 
 use super::Overrides;
 
-/// Keys a robot file cannot hold: the fitted file names them in a comment.
-const NOT_IN_ROBOT_FILE: [(&str, &str); 3] = [
+/// Keys a robot file cannot hold, each with where such a value lives instead: the fitted file names
+/// them in a comment and calibrate's JSON lists them (`_core.NOT_IN_ROBOT_FILE`).
+pub const NOT_IN_ROBOT_FILE: [(&str, &str); 3] = [
     ("ground_friction", "a world file's ground_friction"),
     ("lateral_friction", "no robot-file key"),
     ("mass_scale", "no robot-file key"),

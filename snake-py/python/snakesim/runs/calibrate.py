@@ -80,8 +80,9 @@ FIT_KEYS: tuple[str, ...] = (
     "water.added_inertia",
     "water.linear",
 )
-#: Keys a robot file cannot hold: reported in the JSON and as a comment of the fitted robot file.
-NOT_IN_ROBOT_FILE = ("ground_friction", "lateral_friction", "mass_scale")
+#: Keys a robot file cannot hold: reported in the JSON and as a comment of the fitted robot file
+#: (snake-core's list, the one the fitted file is written by).
+NOT_IN_ROBOT_FILE = tuple(_core.NOT_IN_ROBOT_FILE)
 #: Most simulations of one calibration (``max_evals``).
 MAX_EVALS = LIMITS["calibration_evals"]
 POSITION_SCALE = 0.01  # m
