@@ -44,7 +44,7 @@ fn hook(robot: &Robot, steps: usize) -> f64 {
     for _ in 0..steps {
         let states =
             snake_core::media::MediaState::states(robot.world(), robot.body()).expect("states");
-        let w = media.wrenches(&states);
+        let w = media.wrenches(&states, robot.world().gravity());
         sink += w[0].force.x;
     }
     std::hint::black_box(sink);

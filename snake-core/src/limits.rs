@@ -143,6 +143,11 @@ pub const MAX_WORLD_FRICTION: f64 = 1.0e3;
 /// coefficient would act as 10 anyway (on the default plane, friction 0.5, a coefficient of 10 acts as 5).
 pub const MAX_SKIN_FRICTION: f64 = 10.0;
 
+/// Largest angular frequency `omega` of the swimming gaits (`gait::swim`), rad/s: a cycle in a twentieth
+/// of a second, the library's shortest period (`GAIT_PERIOD`'s low end; written as `40 pi` so that the
+/// Python side reads the value from this source; a test holds it to `2 pi / GAIT_PERIOD.0`).
+pub const MAX_SWIM_OMEGA: f64 = 40.0 * std::f64::consts::PI;
+
 /// Largest density of a fluid medium, kg/m^3 (mercury is 13,534; anything denser is a typo).
 pub const MAX_FLUID_DENSITY: f64 = 2.0e4;
 
@@ -429,6 +434,7 @@ pub const ALL: &[(&str, LimitValue)] = {
         ("slope_degrees", Float(MAX_SLOPE_DEGREES)),
         ("world_friction", Float(MAX_WORLD_FRICTION)),
         ("skin_friction", Float(MAX_SKIN_FRICTION)),
+        ("swim_omega", Float(MAX_SWIM_OMEGA)),
         ("fluid_density", Float(MAX_FLUID_DENSITY)),
         ("current", Float(MAX_CURRENT)),
         ("hydro_coefficient", Float(MAX_HYDRO_COEFFICIENT)),
@@ -482,5 +488,12 @@ mod table_tests {
         names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), super::ALL.len(), "a name twice in limits::ALL");
+    }
+
+    /// The swimming gaits' fastest cycle is the library's shortest period.
+    #[test]
+    fn the_swim_omega_limit_is_the_shortest_period() {
+        let period = std::f64::consts::TAU / super::MAX_SWIM_OMEGA;
+        assert!((period - super::GAIT_PERIOD.0).abs() < 1e-15, "{period}");
     }
 }

@@ -34,7 +34,7 @@ use crate::error::{invalid, Error, Result};
 use crate::gait::{Gait, GaitKind, JointRoles, LateralUndulation, Serpenoid};
 use crate::limits::{short, MAX_MOTOR_VELOCITY, MAX_URDF_BYTES};
 use crate::math::StartPose;
-use crate::media::water::{Coefficients, CoefficientsFile};
+use crate::media::water::{self, Coefficients, CoefficientsFile};
 use crate::media::{MediaState, Primitive};
 use crate::recorded::{FileOrRecord, Reader, RecordedFiles};
 use crate::skin::{SkinAxis, SkinFriction};
@@ -695,6 +695,16 @@ impl Robot {
                     .collect()
             })
             .collect();
+        if ground
+            .media
+            .iter()
+            .any(|m| matches!(m, crate::media::Medium::Water(_)))
+        {
+            let file = spec.source.display();
+            water::check_volumes(&shapes, |k| {
+                format!("{file}: links: {}", spec.urdf.links[k].name)
+            })?;
+        }
         let mut media = MediaState::for_body(&ground.media, &world, body, &shapes)?;
         if let Some(m) = &mut media {
             m.set_water_coefficients(&spec.water);

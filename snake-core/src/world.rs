@@ -246,6 +246,9 @@ pub struct BoxLink {
 pub struct World {
     raw: NonNull<bullet_sys::ss_world>,
     time_step: f64,
+    /// Gravity as last set, m/s^2 (zero until [`World::set_gravity`]): the one value the media's
+    /// buoyancy reads, so that it always works against the gravity the bodies fall under.
+    gravity: Vector3<f64>,
     /// Joint count per body, to size reads without crossing the boundary.
     joints: Vec<usize>,
 }
@@ -291,6 +294,7 @@ impl World {
         Ok(World {
             raw,
             time_step: 1.0 / 240.0,
+            gravity: Vector3::zeros(),
             joints: Vec::new(),
         })
     }
@@ -305,7 +309,14 @@ impl World {
         // SAFETY: self.ptr() is a live world owned by self.
         check(unsafe {
             bullet_sys::ss_world_set_gravity(self.ptr(), gravity.x, gravity.y, gravity.z)
-        })
+        })?;
+        self.gravity = gravity;
+        Ok(())
+    }
+
+    /// Gravity as last set by [`World::set_gravity`], m/s^2, world frame (zero before).
+    pub fn gravity(&self) -> Vector3<f64> {
+        self.gravity
     }
 
     /// `setTimeStep`: seconds per [`World::step`].

@@ -239,3 +239,68 @@ fn water_fit_keys_set_every_links_coefficient() {
     let e = bad.validate().unwrap_err().to_string();
     assert!(e.contains("water.added_mass"), "{e}");
 }
+
+/// Buoyancy works against the world's gravity, not a constant: a chain of cubes under Mars's gravity
+/// (3.71 m/s^2) floats at Archimedes' draft `m / (rho A)`, which does not depend on gravity (weight and
+/// lift scale together). With Earth's gravity in the buoyancy alone it would float 2.64 times higher.
+#[test]
+fn buoyancy_works_against_the_worlds_gravity() {
+    use snake_core::{Snake, SnakeConfig};
+    let pool = WorldRef::load(&repo().join("worlds/pool.yaml")).unwrap();
+    let (h, mass, rho) = (0.05, 0.5, 998.2);
+    let config = SnakeConfig {
+        joints: 2,
+        half_extent: h,
+        base_mass: mass,
+        link_mass: mass,
+        gravity: -3.71,
+        ..SnakeConfig::default()
+    };
+    let start = StartPose {
+        x: 0.0,
+        y: 0.0,
+        z: 1.0,
+        yaw: 0.0,
+    };
+    let mut snake = Snake::in_world(&config, start, pool.spec()).unwrap();
+    snake.set_targets(&[0.0; 2]).unwrap();
+    for _ in 0..240 * 20 {
+        snake.step().unwrap();
+    }
+    let z = snake.base_state().unwrap().pose.position.z;
+    let draft = 1.0 - (z - h);
+    let archimedes = mass / (rho * (2.0 * h) * (2.0 * h));
+    assert!(
+        (draft - archimedes).abs() < 0.01 * archimedes,
+        "draft {draft} m, Archimedes {archimedes} m"
+    );
+}
+
+/// In a world with water, a link without volume (no collision shape) is refused in one line naming
+/// the robot file and the link.
+#[test]
+fn a_link_without_volume_in_water_names_the_file_and_link() {
+    let path = robot_file("hollow", "inertia: file\n");
+    let urdf = path.with_file_name("mamba-10.urdf");
+    let text = std::fs::read_to_string(&urdf).unwrap();
+    let start = text.find("<link name=\"link4\">").unwrap();
+    let collision = start + text[start..].find("<collision>").unwrap();
+    let end = collision + text[collision..].find("</collision>").unwrap() + "</collision>".len();
+    std::fs::write(&urdf, format!("{}{}", &text[..collision], &text[end..])).unwrap();
+    let spec = RobotSpec::load(&path).unwrap();
+    let pool = WorldRef::load(&repo().join("worlds/pool.yaml")).unwrap();
+    let e = Robot::in_world(&spec, spec.default_start(), pool.spec())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("robot.yaml: links: link4: has no volume") && !e.contains('\n'),
+        "{e}"
+    );
+    // Out of water the same robot is fine.
+    Robot::in_world(
+        &spec,
+        spec.default_start(),
+        &snake_core::WorldSpec::default(),
+    )
+    .unwrap();
+}

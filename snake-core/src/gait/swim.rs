@@ -23,7 +23,9 @@ use serde::Serialize;
 use super::joints::{JointRole, JointRoles};
 use super::{Gait, GaitKind};
 use crate::error::{invalid, Result};
-use crate::limits::{check_range, GAIT_AMPLITUDE, GAIT_OFFSET, GAIT_PHASE, GAIT_RAMP};
+use crate::limits::{
+    check_range, GAIT_AMPLITUDE, GAIT_OFFSET, GAIT_PHASE, GAIT_RAMP, MAX_SWIM_OMEGA,
+};
 
 /// Which of Kelasidi et al.'s envelopes `g(i, n)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -96,9 +98,6 @@ pub fn set(p: &mut SwimParams, gait: GaitKind, key: &str, value: f64) -> Result<
     *slot = value;
     Ok(())
 }
-
-/// The largest `omega`, rad/s: a cycle in a twentieth of a second (the library's shortest period).
-pub const MAX_SWIM_OMEGA: f64 = std::f64::consts::TAU / crate::limits::GAIT_PERIOD.0;
 
 /// One of the swimming gaits on a robot's joints.
 #[derive(Debug, Clone, PartialEq, Serialize)]

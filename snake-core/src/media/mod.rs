@@ -155,10 +155,6 @@ impl MediaState {
                 LinkGeometry::new(mass, shapes, element, "the world file's media: element")
             })
             .collect::<Result<Vec<_>>>()?;
-        // Water acts on a link through its volume: a link without one would float through it.
-        if media.iter().any(|m| matches!(m, Medium::Water(_))) {
-            water::check_volumes(&links)?;
-        }
         let memory = vec![vec![LinkMemory::default(); links.len()]; media.len()];
         Ok(Some(MediaState {
             media: media.to_vec(),
@@ -251,14 +247,15 @@ impl MediaState {
         Ok(states)
     }
 
-    /// Every link's wrench from every medium for these states (the base first).
-    pub fn wrenches(&mut self, states: &[LinkState]) -> Vec<Wrench> {
+    /// Every link's wrench from every medium for these states (the base first), under `gravity` (the
+    /// world's, m/s^2: what buoyancy works against).
+    pub fn wrenches(&mut self, states: &[LinkState], gravity: Vector3<f64>) -> Vec<Wrench> {
         let mut out = vec![Wrench::default(); self.links.len()];
         for (medium, memory) in self.media.iter().zip(&mut self.memory) {
             for (k, ((link, state), mem)) in self.links.iter().zip(states).zip(memory).enumerate() {
                 out[k] += match medium {
                     Medium::Granular(g) => g.wrench(link, state, self.dt, mem),
-                    Medium::Water(w) => w.wrench(link, state, self.dt, mem),
+                    Medium::Water(w) => w.wrench(link, state, self.dt, gravity, mem),
                 };
             }
         }
@@ -268,7 +265,7 @@ impl MediaState {
     /// Applies every link's wrench for the next physics step (forces at the centre of mass).
     pub fn apply(&mut self, world: &mut World, body: BodyId) -> Result<()> {
         let states = Self::states(world, body)?;
-        let wrenches = self.wrenches(&states);
+        let wrenches = self.wrenches(&states, world.gravity());
         for (k, (w, state)) in wrenches.iter().zip(&states).enumerate() {
             if w.force == Vector3::zeros() && w.torque == Vector3::zeros() {
                 continue;

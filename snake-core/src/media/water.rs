@@ -30,7 +30,8 @@
 //! (w r)^2` on the wetted side). This is strip theory for a slender body as in Morison's equation:
 //! no wake, no vortex shedding, no free-surface waves, no interaction between links.
 //!
-//! **Buoyancy** is `rho g V` upward at the centre of the submerged volume, computed from the link's
+//! **Buoyancy** is `rho g V` against the world's gravity (`World::gravity`, read at every step: one
+//! value for the bodies' weight and the water's lift) at the centre of the submerged volume, computed from the link's
 //! collision primitives: a sphere exactly (a spherical cap), a box and a cylinder as slices whose
 //! submerged fraction is linear in their depth (exact for a box with vertical or horizontal faces,
 //! within a few per cent for a tilted or horizontal cylinder), a capsule as its cylinder and two
@@ -50,9 +51,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid, Result};
 use crate::media::{Region, RegionFile};
-
-/// Standard gravity, m/s^2 (snakesim's worlds' default, `SnakeConfig::gravity`).
-pub const STANDARD_GRAVITY: f64 = 9.81;
 
 /// Fresh water at 20 degrees C, kg/m^3.
 pub const WATER_DENSITY: f64 = 998.2;
@@ -199,9 +197,6 @@ pub struct Water {
     pub current: Vector3<f64>,
     /// The medium's coefficients (links may override them).
     pub coefficients: Coefficients,
-    /// Gravity, m/s^2, world frame: standard gravity until the body that swims in it sets its
-    /// world's ([`Water::set_gravity`]).
-    pub gravity: Vector3<f64>,
     /// Scale of the added mass's relaxation gain (1: the gain that makes the loop dead-beat; stable
     /// below 2). Not a file key: it is there for the study that shows steady swimming does not
     /// depend on it (tests/water.rs, docs/media.md).
@@ -240,7 +235,6 @@ impl WaterFile {
             density,
             current: Vector3::from(current),
             coefficients,
-            gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),
             relaxation: 1.0,
         })
     }
@@ -326,15 +320,20 @@ pub fn check_overlap(media: &[crate::media::Medium]) -> Result<()> {
 }
 
 /// Refuses links without volume (no box, cylinder, capsule or sphere collision shape) in a world with
-/// water, naming the first (links are numbered as pybullet's, -1 the base).
-pub fn check_volumes(links: &[crate::media::geometry::LinkGeometry]) -> Result<()> {
-    for (k, link) in links.iter().enumerate() {
-        let volume = link.volume();
+/// water: water acts on a link through its volume, and one without would sink through it unseen.
+/// `shapes` are each link's collision shapes (the base first); `name(k)` names link `k` in the message
+/// (a robot's: its file and the link's name).
+pub fn check_volumes(
+    shapes: &[Vec<crate::media::geometry::Primitive>],
+    name: impl Fn(usize) -> String,
+) -> Result<()> {
+    for (k, link) in shapes.iter().enumerate() {
+        let volume: f64 = link.iter().map(|p| p.volume()).sum();
         if volume.is_nan() || volume <= 0.0 {
             return Err(invalid(format!(
-                "media: water: link {} has no volume (no box, cylinder, capsule or sphere collision \
-                 shape), so water cannot act on it",
-                k as i64 - 1
+                "{}: has no volume (no box, cylinder, capsule or sphere collision shape), so the \
+                 world's water cannot act on it",
+                name(k)
             )));
         }
     }
@@ -670,13 +669,9 @@ impl Accumulator {
 }
 
 impl Water {
-    /// Sets the gravity buoyancy works against (the world's, m/s^2).
-    pub fn set_gravity(&mut self, gravity: Vector3<f64>) {
-        self.gravity = gravity;
-    }
-
     /// Water's force and torque on a link (the media's common interface, [`crate::media`]): the
-    /// link's primitives and mass from `link`, its state, the step `dt`; `memory` keeps the previous
+    /// link's primitives and mass from `link`, its state, the step `dt`, the world's `gravity` (m/s^2,
+    /// what buoyancy works against); `memory` keeps the previous
     /// velocities (`previous_linear`, `previous_angular`) and the relaxed linear and angular
     /// accelerations of the added mass (`elements[0]`, `elements[1]`). A link with no volume feels
     /// nothing (robots with water are checked for such links when they are built).
@@ -685,6 +680,7 @@ impl Water {
         link: &crate::media::geometry::LinkGeometry,
         state: &crate::media::LinkState,
         dt: f64,
+        gravity: Vector3<f64>,
         memory: &mut crate::media::LinkMemory,
     ) -> crate::media::Wrench {
         let solids = link.shapes.iter().map(placed);
@@ -708,7 +704,7 @@ impl Water {
             linear: state.linear,
             angular: state.angular,
         };
-        let f = self.wrench_of(&hydro, solids, &s, dt, self.gravity, &mut mem);
+        let f = self.wrench_of(&hydro, solids, &s, dt, gravity, &mut mem);
         memory.previous_linear = mem.previous.map(|p| p.0);
         memory.previous_angular = mem.previous.map(|p| p.1);
         memory.elements.clear();
