@@ -6,13 +6,16 @@
   Maladen et al.'s peak near 0.2 and measured 0.34;
 - printed: a plain drop test (a box dropped into the sand: its depth and vertical speed), the element
   size and `elastic` studies (efficiency and the resting depth against each), the cube snake and
-  yaw-pitch-16 on the sand's surface.
+  yaw-pitch-16 on the sand's surface, and why the robot sandfish advances on rigid ground (its
+  frequency, heading and contacts, beside a quasi-static Coulomb model of the same wave written here).
 
     .venv/bin/python scripts/media_figures.py
 """
 
 from __future__ import annotations
 
+import math
+import re
 import tempfile
 from pathlib import Path
 
@@ -110,6 +113,108 @@ def on_the_surface() -> None:
         print(f"yaw-pitch-16, its gait, 10 s on {name}: moved {moved}")
 
 
+def robot_variant(contact: str = "", spheres: int = 0) -> Path:
+    """The robot sandfish with a <contact> element on every link (pybullet's soft contact, say) and/or
+    each segment's cylinder replaced, for contact with the ground, by ``spheres`` spheres of its radius
+    along it (a line contact, which Bullet's cylinder-on-plane contact is not)."""
+    text = (ROBOTS / "sandfish-robot.urdf").read_text()
+    if contact:
+        text = re.sub(r'(<link name="seg\d">)', r"\1" + contact, text)
+    if spheres:
+        radius, half = 0.0175, 0.0325
+
+        def chain(match: re.Match[str]) -> str:
+            centre = float(match.group(1))
+            offsets = np.linspace(-half + radius, half - radius, spheres)
+            return "".join(
+                f'<collision><origin xyz="{centre + o:.5f} 0 0"/><geometry><sphere radius="{radius}"/>'
+                "</geometry></collision>"
+                for o in offsets
+            )
+
+        cylinder = r'<collision><origin xyz="([-0-9.]+) 0 0" rpy="[^"]*"/><geometry><cylinder[^/]*/>'
+        text = re.sub(cylinder + "</geometry></collision>", chain, text)
+    folder = Path(tempfile.mkdtemp())
+    (folder / "sandfish-robot.urdf").write_text(text)
+    robot = folder / "sandfish-robot.yaml"
+    robot.write_text((ROBOTS / "sandfish-robot.yaml").read_text())
+    return robot
+
+
+def quasi_static_coulomb(points: str, frequency: float = 0.5, cycles: int = 3) -> float:
+    """The robot sandfish's wave on isotropic Coulomb friction without inertia (Hu et al. 2009's model
+    with equal coefficients): at every step the body's rigid motion (vx, vy, w) is the one whose
+    friction forces and moment sum to zero, i.e. the minimum of the dissipation sum |v_i| (convex;
+    Newton on |v| smoothed by 1e-6 m/s). ``points``: "line" (10 points a segment) or "ends" (the
+    segments' ends, where Bullet puts a cylinder's contact). Returns the centre of mass's advance per
+    cycle along the start axis, body lengths, over the last cycle."""
+    seg, body = sand.SEGMENT, sand.BODY
+    robot = ROBOTS / "sandfish-robot.yaml"
+    wave = sand.sandfish_targets(robot, 0.2 * body, body, frequency, seg, cycles / frequency)
+    along = (np.arange(10) + 0.5) / 10 - 0.5 if points == "line" else np.array([-0.5, 0.5])
+
+    def shape(joints: np.ndarray) -> np.ndarray:  # in the head's frame, the head's centre at 0
+        heading = np.concatenate([[0.0], np.cumsum(joints)])
+        centres = sand.segment_centres(np.array([[0, 0, 0, 0, 0, 0, 1.0]]), joints[None, :])[0]
+        d = np.stack([np.cos(heading), np.sin(heading)], axis=1)
+        return (centres[:, None, :] + along[None, :, None] * seg * d[:, None, :]).reshape(-1, 2)
+
+    dt, eps = 1.0 / RATE, 1e-6
+    pose, x, mass = np.zeros(3), np.zeros(3), []
+    shapes = [shape(t) for t in wave]
+    for k in range(len(wave) - 1):
+        p, u = shapes[k], (shapes[k + 1] - shapes[k]) / dt
+        a = np.zeros((len(p), 2, 3))
+        a[:, 0, 0], a[:, 1, 1], a[:, 0, 2], a[:, 1, 2] = 1, 1, -p[:, 1], p[:, 0]
+
+        def speeds(x: np.ndarray, a: np.ndarray = a, u: np.ndarray = u) -> np.ndarray:
+            return np.einsum("nij,j->ni", a, x) + u
+
+        for _ in range(100):
+            v = speeds(x)
+            norm = np.sqrt((v**2).sum(1) + eps**2)
+            grad = np.einsum("nji,nj->i", a, v / norm[:, None])
+            outer = v[:, :, None] * v[:, None, :] / (norm**3)[:, None, None]
+            m = np.eye(2)[None] / norm[:, None, None] - outer
+            step = np.linalg.solve(np.einsum("nji,njk,nkl->il", a, m, a), grad)
+            t, before = 1.0, norm.sum()
+            while t > 1e-9 and np.sqrt((speeds(x - t * step) ** 2).sum(1) + eps**2).sum() > before:
+                t /= 2
+            x = x - t * step
+            if np.abs(t * step).max() < 1e-12:
+                break
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        pose = pose + dt * np.array([c * x[0] - s * x[1], s * x[0] + c * x[1], x[2]])
+        com = p.mean(0)
+        mass.append(pose[:2] + np.array([c * com[0] - s * com[1], s * com[0] + c * com[1]]))
+    per = int(round(RATE / frequency))
+    return float(mass[-1][0] - mass[-1 - per][0]) / body
+
+
+def rigid_ground() -> None:
+    """Why the robot sandfish advances on rigid flat ground (sand.sandfish-rigid-ground)."""
+    print("robot sandfish on rigid ground: centre of mass's advance along the body's axis, lengths/cycle")
+    for f in (0.25, 0.5, 1.0, 1.5):
+        print(f"  {f} Hz: {sand.rigid_ground_advance(f).mean():+.4f}")
+    for yaw in (30, 45):
+        advance = sand.rigid_ground_advance(0.5, yaw=math.radians(yaw)).mean()
+        print(f"  0.5 Hz, heading {yaw} deg: {advance:+.4f}")
+    for mu in (0.1, 1.0):
+        w = f"ground_friction: {mu}\n"
+        print(f"  1 Hz, ground_friction {mu}: {sand.rigid_ground_advance(1.0, world_text=w).mean():+.4f}")
+    soft = "<contact><stiffness value='10000'/><damping value='20'/></contact>"
+    for name, robot in (
+        ("soft contacts (stiffness 1e4 N/m, damping 20)", robot_variant(soft)),
+        ("9 spheres a segment, rigid", robot_variant(spheres=9)),
+        ("9 spheres a segment, soft", robot_variant(soft, spheres=9)),
+    ):
+        for f in (0.5, 1.0):
+            print(f"  {name}, {f} Hz: {sand.rigid_ground_advance(f, robot).mean():+.4f}")
+    for points in ("line", "ends"):
+        advance = quasi_static_coulomb(points)
+        print(f"  quasi-static isotropic Coulomb, contact on the {points}, 0.5 Hz: {advance:+.4f}")
+
+
 def main() -> None:
     FIGURES.mkdir(parents=True, exist_ok=True)
     alpha_maps()
@@ -117,6 +222,7 @@ def main() -> None:
     print("efficiency against A/lambda:", ", ".join(f"{a:g}: {e:.4f}" for a, e in sweep))
     study()
     on_the_surface()
+    rigid_ground()
 
 
 if __name__ == "__main__":

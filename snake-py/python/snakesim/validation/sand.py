@@ -19,7 +19,7 @@ import numpy as np
 
 from snakesim.media import probe, rft_alpha
 from snakesim.validation import Case, Result, relative
-from snakesim.validation.simulate import RATE, ROBOTS, run, sandfish_targets
+from snakesim.validation.simulate import RATE, ROBOTS, run, run_with_joints, sandfish_targets
 
 LI = "Li, Zhang & Goldman 2013, Science 339:1408"
 MALADEN = "Maladen et al. 2011, IJRR 30(7):793"
@@ -167,18 +167,69 @@ def _efficiency(frequency: float) -> Result:
     )
 
 
+def segment_centres(base: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """The centres of the robot sandfish's seven segments in the ground plane, (steps, 7, 2), from its
+    head's pose and its six yaw joints' angles (the chain of robots/sandfish-robot.urdf: the head's
+    centre is the base, each joint at the end of a segment, the body along -x). The body on flat ground
+    stays level (yaw joints only), so the plane is its frame."""
+    x, y, z, w = base[:, 3], base[:, 4], base[:, 5], base[:, 6]
+    heading = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    angles = heading[:, None] + np.concatenate([np.zeros((len(base), 1)), np.cumsum(joints, axis=1)], axis=1)
+    back = -np.stack([np.cos(angles), np.sin(angles)], axis=2)  # unit vectors towards the tail
+    centres = np.empty((len(base), SEGMENTS, 2))
+    centres[:, 0] = base[:, :2]
+    joint = base[:, :2] + back[:, 0] * SEGMENT / 2
+    for i in range(1, SEGMENTS):
+        centres[:, i] = joint + back[:, i] * SEGMENT / 2
+        joint = joint + back[:, i] * SEGMENT
+    return centres
+
+
+def advance_per_cycle(centres: np.ndarray, first: int, per: int) -> np.ndarray:
+    """The centre of mass's advance in body lengths over each whole cycle from step ``first`` (cycles of
+    ``per`` steps), along the body's mean axis in that cycle (the mean of tail-to-head over the cycle):
+    what "moves forward" means for an undulating body, whose head swings and whose heading oscillates."""
+    mass = centres.mean(axis=1)  # equal segments
+    out = []
+    for a in range(first, len(centres) - per, per):
+        axis = (centres[a : a + per, 0] - centres[a : a + per, -1]).mean(axis=0)
+        out.append(float((mass[a + per] - mass[a]) @ axis / np.linalg.norm(axis)) / BODY)
+    return np.array(out)
+
+
+def rigid_ground_advance(
+    frequency: float = 1.0,
+    robot: Path | None = None,
+    world_text: str = RIGID,
+    cycles: int = 4,
+    yaw: float = 0.0,
+) -> np.ndarray:
+    """The robot sandfish on rigid flat ground: held for a second in the wave's first shape (it settles
+    there: the snap into shape turns it), one cycle of the wave to settle into its motion, then
+    ``cycles`` whole cycles, each one's advance (:func:`advance_per_cycle`)."""
+    robot = robot or ROBOTS / "sandfish-robot.yaml"
+    wave = sandfish_targets(robot, 0.2 * BODY, BODY, frequency, SEGMENT, (cycles + 1) / frequency)
+    hold = int(RATE)
+    targets = np.concatenate([np.repeat(wave[:1], hold, axis=0), wave])
+    with tempfile.TemporaryDirectory() as folder:
+        world = Path(folder) / "world.yaml"
+        world.write_text(world_text)
+        base, joints = run_with_joints(robot, targets, world, (0.0, 0.0, 0.0175, yaw))
+    per = int(round(RATE / frequency))
+    return advance_per_cycle(segment_centres(base, joints), hold + per - 1, per)
+
+
 def _rigid_no_advance() -> Result:
-    forward, wave = _sandfish_speed(RIGID, 0.2, 1.0, start=(0.0, 0.0, 0.0175, 0.0))
-    per_cycle = abs(forward) / 1.0 / BODY
+    advance = float(rigid_ground_advance().mean())
     return Result(
         name="sand.sandfish-rigid-ground",
-        quantity="advance on rigid flat ground, isotropic friction 0.3, 1 Hz",
+        quantity="advance of the centre of mass along the body's axis, rigid flat ground, friction 0.3, 1 Hz",
         published=0.0,
         unit="body lengths/cycle",
         source=f"{MALADEN} (no forward motion on a rigid flat surface)",
-        simulated=per_cycle,
+        simulated=advance,
         tolerance="< 0.02 body lengths per cycle",
-        passed=per_cycle < 0.02,
+        passed=abs(advance) < 0.02,
     )
 
 

@@ -55,10 +55,19 @@ def run(
     start: tuple[float, float, float, float] | None = None,
 ) -> npt.NDArray[np.float64]:
     """The base pose (x, y, z, qx, qy, qz, qw) after every physics step."""
-    base, _ = _core.simulate_robot(
+    return run_with_joints(robot, targets, world, start)[0]
+
+
+def run_with_joints(
+    robot: Path,
+    targets: npt.NDArray[np.float64],
+    world: Path | None = None,
+    start: tuple[float, float, float, float] | None = None,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The base pose after every physics step, as :func:`run`, and the joint angles (steps, joints)."""
+    return _core.simulate_robot(
         os.fspath(robot),
         np.ascontiguousarray(targets),
         None if world is None else os.fspath(world),
         start,
     )
-    return base
