@@ -13,8 +13,19 @@ test treats it; the page's reader never sees it:
                                         ARGS as sys.argv[1:], e.g. a simulated robot for a control loop
                                         written for hardware
 
-Long commands are shortened by the rules of `shorten` (fewer episodes, a tiny training); with
-SNAKESIM_DOC_TESTS=full in the environment they run as written.
+    <!-- test name: NAME -->            (Python) names the block for `test with`
+    <!-- test with: NAME -->            (Python) the named block's code runs first, in the same
+                                        interpreter (after any prelude): a class defined once on the
+                                        page and used by two loops
+
+The model cards' inline commands (`snakesim ...`, `snake-cli ...`, `python ...` in backticks outside a
+fence: "Trained with", "Evaluated with") run too, each as a one-line sh block at its place on the page;
+a `<!-- not run: REASON -->` or `<!-- test: OLD => NEW -->` right after the closing backtick applies to
+that command (INLINE_PAGES, `inline_commands`).
+
+Long commands are shortened by the rules of `shorten` (fewer episodes, a tiny training with short
+episodes and a short imitation, a 2 s simulation); with SNAKESIM_DOC_TESTS=full in the environment they
+run as written.
 """
 
 from __future__ import annotations
@@ -40,22 +51,39 @@ PAGES = [
 
 RUN_LANGUAGES = {"sh": "sh", "bash": "sh", "python": "python"}
 FENCE = re.compile(r"^(\s*)```(\S*)\s*$")
-MARKER = re.compile(r"^\s*<!--\s*(not run|test before|test prelude|test)\s*:\s*(.*?)\s*-->\s*$")
+MARKER = re.compile(
+    r"^\s*<!--\s*(not run|test before|test prelude|test name|test with|test)\s*:\s*(.*?)\s*-->\s*$"
+)
+#: The pages whose inline commands run as well as their blocks: the model cards.
+INLINE_PAGES = ("models/",)
+#: An inline command: a code span that starts with a tool (it may wrap across lines), and the markers
+#: right after it.
+INLINE = re.compile(
+    r"`((?:\.venv/bin/|\./target/release/)?(?:snakesim|snake-cli|python)\s[^`]*)`((?:\s*<!--.*?-->)*)", re.S
+)
+INLINE_MARKER = re.compile(r"<!--\s*(not run|test)\s*:\s*(.*?)\s*-->", re.S)
 
 #: Run as written, no shortening (slow: full evaluations and trainings).
 FULL = os.environ.get("SNAKESIM_DOC_TESTS") == "full"
 
-#: The shortened training: one rollout of 4 envs x 256 steps, one update epoch, one evaluation episode.
+#: The shortened training: one rollout of 2 envs x 256 steps, one update epoch, one evaluation episode,
+#: episodes of at most 200 steps (the paper's env runs 5,000 unless the goal is reached: an untrained
+#: policy's evaluation episode took most of a tiny training's time; goal-20.yaml's 1,024-step training
+#: with 500-step episodes took 10 s, this one 2.8 s).
 TINY_TRAINING = {
-    "timesteps": "1024",
-    "n_envs": "4",
+    "timesteps": "512",
+    "n_envs": "2",
     "ppo.n_steps": "256",
     "ppo.batch_size": "256",
     "ppo.n_epochs": "1",
-    "eval_freq": "1024",
+    "eval_freq": "512",
     "eval_episodes": "1",
-    "checkpoint_freq": "1024",
+    "checkpoint_freq": "512",
+    "env.max_episode_steps": "200",
 }
+#: Added where the config imitates a controller before PPO (`init:`; 65,536 steps in paper-init-20.yaml,
+#: 27 s of a tiny training's 38 s).
+TINY_INIT = {"init.steps": "1024"}
 
 
 @dataclass
@@ -68,6 +96,9 @@ class Block:
     substitutions: list[tuple[str, str]] = field(default_factory=list)
     before: list[str] = field(default_factory=list)
     prelude: str | None = None
+    label: str | None = None  # `test name`
+    uses: list[str] = field(default_factory=list)  # `test with`
+    inline: bool = False  # a card's inline command, not a fenced block
 
     @property
     def name(self) -> str:
@@ -84,7 +115,55 @@ class Block:
 
 
 def blocks(page: str) -> list[Block]:
-    """Every ```sh and ```python block of a page (path from the repository root), with its markers."""
+    """Every ```sh and ```python block of a page (path from the repository root), with its markers, and
+    on the pages of INLINE_PAGES its inline commands, in the order of the page."""
+    found = fenced_blocks(page)
+    if page.startswith(INLINE_PAGES):
+        found = sorted(found + inline_commands(page), key=lambda b: b.line)
+    return found
+
+
+def parse_substitutions(where: str, value: str) -> list[tuple[str, str]]:
+    pairs = []
+    for pair in value.split(" ;; "):
+        old, sep, new = pair.partition(" => ")
+        if not sep:
+            raise ValueError(f"{where}: expected <!-- test: OLD => NEW -->")
+        pairs.append((old, new))
+    return pairs
+
+
+def outside_fences(text: str) -> str:
+    """The page with every fenced block's lines blanked (line numbers kept)."""
+    lines, inside = text.split("\n"), False
+    for i, line in enumerate(lines):
+        if inside or FENCE.match(line):
+            inside = not (inside and line.strip() == "```")
+            lines[i] = ""
+    return "\n".join(lines)
+
+
+def inline_commands(page: str) -> list[Block]:
+    """The page's inline commands outside fences, each a one-line sh block (a command wrapped over
+    lines joined by spaces), with the markers that follow its closing backtick."""
+    text = outside_fences((REPO / page).read_text())
+    found = []
+    for match in INLINE.finditer(text):
+        line = text.count("\n", 0, match.start()) + 1
+        block = Block(page, line, "sh", " ".join(match.group(1).split()) + "\n", inline=True)
+        for kind, value in INLINE_MARKER.findall(match.group(2)):
+            value = " ".join(value.split())
+            if not value:
+                raise ValueError(f"{page}:{line}: an empty <!-- {kind}: --> marker")
+            if kind == "not run":
+                block.not_run = value
+            else:
+                block.substitutions += parse_substitutions(f"{page}:{line}", value)
+        found.append(block)
+    return found
+
+
+def fenced_blocks(page: str) -> list[Block]:
     lines = (REPO / page).read_text().split("\n")
     found = []
     i = 0
@@ -112,13 +191,13 @@ def blocks(page: str) -> list[Block]:
             if kind == "not run":
                 block.not_run = value
             elif kind == "test":
-                for pair in value.split(" ;; "):
-                    old, sep, new = pair.partition(" => ")
-                    if not sep:
-                        raise ValueError(f"{page}:{j + 1}: expected <!-- test: OLD => NEW -->")
-                    block.substitutions.append((old, new))
+                block.substitutions += parse_substitutions(f"{page}:{j + 1}", value)
             elif kind == "test before":
                 block.before.insert(0, value)
+            elif kind == "test name":
+                block.label = value
+            elif kind == "test with":
+                block.uses.insert(0, value)
             else:
                 block.prelude = value
             j -= 1
@@ -166,9 +245,11 @@ def shorten(command: str) -> str:
         body = with_flag(body, "--episodes", "1")
     elif kind == "replay":
         body = with_flag(with_flag(body, "--episodes", "1", append=False), "--seconds", "2")
+    elif kind == "run":
+        body = with_flag(body, "--seconds", "2")
     elif kind in ("train", "sweep", "search") and "--resume" not in words:
         if kind == "sweep":
-            body = with_flag(body, "--seeds", "1", append=False)
+            body = first_grid_values(with_flag(body, "--seeds", "1", append=False))
         if kind == "search":
             body = with_flag(body, "--trials", "2", append=False)
         body = tiny_training(body)
@@ -189,15 +270,32 @@ def with_flag(body: str, flag: str, value: str, append: bool = True) -> str:
     return f"{body} {flag} {value}" if append else body
 
 
+GRID = re.compile(r"(\s--grid(?:\s+|=))([\w.]+=)([^\s,\[\]'\"]+)(?:,[^\s\[\]'\"]+)+(?=\s|$)")
+
+
+def first_grid_values(body: str) -> str:
+    """A sweep's `--grid KEY=V1,V2,...` cut to V1 (one trial less per value: Ray starts each)."""
+    return GRID.sub(r"\g<1>\g<2>\g<3>", body)
+
+
 #: The flags and --set keys of a training's size, which tiny_training replaces.
 SIZE_FLAGS = re.compile(r"\s--(?:timesteps|n-envs|eval-freq|eval-episodes|checkpoint-freq)(?:\s+|=)\S+")
-SIZE_SETS = re.compile(r"\s--set(?:\s+|=)(?:" + "|".join(re.escape(k) for k in TINY_TRAINING) + r")=\S+")
+SIZE_SETS = re.compile(
+    r"\s--set(?:\s+|=)(?:" + "|".join(re.escape(k) for k in {**TINY_TRAINING, **TINY_INIT}) + r")=\S+"
+)
+CONFIG = re.compile(r"\s--config(?:\s+|=)(\S+)")
 
 
 def tiny_training(body: str) -> str:
-    """Drops the command's own sizes and sets TINY_TRAINING's."""
+    """Drops the command's own sizes and sets TINY_TRAINING's (and TINY_INIT's where its config
+    imitates)."""
     body = SIZE_SETS.sub("", SIZE_FLAGS.sub("", body))
-    return body + "".join(f" --set {key}={value}" for key, value in TINY_TRAINING.items())
+    sizes = dict(TINY_TRAINING)
+    config = CONFIG.search(body)
+    if config and (REPO / config.group(1)).is_file():
+        if re.search(r"^init:", (REPO / config.group(1)).read_text(), re.M):
+            sizes.update(TINY_INIT)
+    return body + "".join(f" --set {key}={value}" for key, value in sizes.items())
 
 
 # --- running ------------------------------------------------------------------------------------
@@ -227,8 +325,6 @@ LINKED = [
 ]
 #: A block's time limit, seconds (a shortened block takes a few).
 TIMEOUT = None if FULL else 240
-#: At most this many blocks are not run; each says why.
-MOST_NOT_RUN = 16
 
 #: `--serve` runs until Ctrl-C: started, stopped once it has printed its address, which must come.
 SERVE_CHECK = r"""
@@ -305,14 +401,18 @@ def check_page(page: str, tmp_path: Path) -> None:
     """Runs the page's blocks in order in one folder; fails on the first that fails, naming it."""
     root = sandbox(tmp_path)
     found = blocks(page)
+    named = {b.label: b for b in found if b.label}
     ran = []
     for block in found:
         if block.not_run:
             continue
         for command in block.before:
             run(Block(page, block.line, "sh", command + "\n"), root, shorten_script(command))
+        unknown = [name for name in block.uses if name not in named]
+        if unknown:
+            raise ValueError(f"{block.name}: <!-- test with: {unknown[0]} -->: no block of that name")
         start = time.monotonic()
-        run(block, root, block.prepared())
+        run(block, root, "".join(named[name].prepared() + "\n" for name in block.uses) + block.prepared())
         print(f"{block.name}: {time.monotonic() - start:.1f} s")  # pytest -rP shows each block's time
         ran.append(block.line)
     assert ran == [b.line for b in found if not b.not_run]

@@ -2,11 +2,13 @@
 
 Each page's ```sh and ```python blocks run in order in a fresh folder laid out as the repository root
 after `bash scripts/setup` (the inputs linked, `out/` empty, no `runs/`), with `.venv/bin` and
-`target/release` on PATH as the README says. Long commands are shortened (one evaluation episode, a
-1,024-step training; the rules and the markers a page may set: snake-py/tests/_doc_blocks.py);
-SNAKESIM_DOC_TESTS=full runs them as written. A block that cannot run here says why in its source
-(`<!-- not run: REASON -->`), and each page's test asserts that every other block ran. The pages of
-docs._doc_blocks.SECOND_HALF run in snake-py/tests/test_doc_examples_more.py, on the other core."""
+`target/release` on PATH as the README says; so do the model cards' inline commands ("Trained with:
+`snake-cli train ...`"), each at its place. Long commands are shortened (one evaluation episode, a
+512-step training of 200-step episodes, a 2 s simulation; the rules and the markers a page may set:
+snake-py/tests/_doc_blocks.py); SNAKESIM_DOC_TESTS=full runs them as written. A block or command that
+cannot run here says why in its source (`<!-- not run: REASON -->`), and each page's test asserts that
+every other one ran. The pages of docs._doc_blocks.SECOND_HALF run in
+snake-py/tests/test_doc_examples_more.py, on the other core."""
 
 from __future__ import annotations
 
@@ -18,8 +20,8 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _doc_blocks as docs  # noqa: E402
 
-#: At most this many blocks are not run (17 of 63 on 2026-11-29: installs, setup, Ray, minutes-long
-#: fits and builds); each says why.
+#: At most this many blocks and inline commands are not run (18 of 90 on 2026-11-29: installs, setup,
+#: Ray, minutes-long fits and builds, the paper's zip); each says why.
 MOST_NOT_RUN = 20
 
 
@@ -47,6 +49,29 @@ def test_the_collector_finds_the_examples_and_their_markers():
     assert sum(len(docs.blocks(page)) for page in docs.PAGES) > 50
 
 
+def test_the_cards_inline_commands_are_collected_with_their_markers():
+    cards = [page for page in docs.PAGES if page.startswith("models/")]
+    inline = {page: [b for b in docs.blocks(page) if b.inline] for page in cards}
+    for page in cards:  # every card found (new ones too) runs the commands it says it was made with
+        text, commands = (docs.REPO / page).read_text(), [b.text for b in docs.blocks(page)]
+        if "**Evaluated with**" in text:
+            assert any(" evaluate " in c for c in commands), page
+        if "**Trained with**" in text:
+            assert any(" train " in b.text for b in inline[page]), page
+    detour = [b for b in inline["models/pegs-10.md"] if "detour_pegs.py" in b.text]
+    assert [b.prepared() for b in detour] == [
+        ".venv/bin/python experiments/pegs-detour/detour_pegs.py 1 900000 10\n"
+    ]
+    zips = [b for b in inline["models/paper-10.md"] if "ppo_10_20000000_steps.zip" in b.text]
+    assert len(zips) == 1 and "not shipped" in zips[0].not_run
+    # A fenced block's commands are the block's, not inline ones.
+    fenced = docs.fenced_blocks("models/robust-yaw-pitch-16.md")
+    assert fenced and not any(
+        b.line == f.line for b in inline["models/robust-yaw-pitch-16.md"] for f in fenced
+    )
+    assert all(b.text.count("\n") == 1 for bs in inline.values() for b in bs)
+
+
 #: A command and what the test runs instead.
 SHORTENED = [
     (
@@ -61,6 +86,11 @@ SHORTENED = [
     ("snakesim view a.rrd --serve  # open it", "serve_check snakesim view a.rrd --serve  # open it"),
     ("snakesim replay m --spawn", "echo 'not run (needs a display): snakesim replay m --spawn'"),
     ("ls runs", "ls runs"),
+    (
+        "snake-cli run --joints 10 --seconds 10 --plot a.png",
+        "snake-cli run --joints 10 --seconds 2 --plot a.png",
+    ),
+    ("snake-cli run --world w.yaml  # x", "snake-cli run --world w.yaml --seconds 2  # x"),
 ]
 
 
@@ -73,5 +103,19 @@ def test_the_shortening_rules(command, shortened):
 @pytest.mark.skipif(docs.FULL, reason="SNAKESIM_DOC_TESTS=full: nothing is shortened")
 def test_a_training_is_shortened_to_one_small_rollout():
     train = docs.shorten("snake-cli train --config c.yaml --timesteps 5242880 --set eval_freq=65536 --seed S")
-    assert train.startswith("snake-cli train --config c.yaml --seed S --set timesteps=1024 --set n_envs=4")
-    assert "5242880" not in train and "65536" not in train and "--set eval_freq=1024" in train
+    assert train.startswith("snake-cli train --config c.yaml --seed S --set timesteps=512 --set n_envs=2")
+    assert "5242880" not in train and "65536" not in train and "--set eval_freq=512" in train
+    assert train.endswith("--set env.max_episode_steps=200") and "init.steps" not in train
+
+
+def test_an_imitating_training_imitates_briefly():
+    train = docs.shorten("snake-cli train --config snake-py/configs/paper-init-20.yaml --set init.steps=9")
+    assert train.endswith("--set env.max_episode_steps=200 --set init.steps=1024") and "=9" not in train
+
+
+def test_a_sweep_keeps_each_grids_first_value():
+    assert docs.first_grid_values("snakesim sweep c.yaml --grid a.b=1e-4,3e-4 --grid c=x,y,z --out s") == (
+        "snakesim sweep c.yaml --grid a.b=1e-4 --grid c=x --out s"
+    )
+    lists = "snakesim sweep c.yaml --grid 'env.goal=[0, -10],[5, 5]'"
+    assert docs.first_grid_values(lists) == lists  # the shell's quoting: left as written
