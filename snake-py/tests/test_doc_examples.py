@@ -12,6 +12,7 @@ snake-py/tests/test_doc_examples_more.py, on the other core."""
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -119,3 +120,47 @@ def test_a_sweep_keeps_each_grids_first_value():
     )
     lists = "snakesim sweep c.yaml --grid 'env.goal=[0, -10],[5, 5]'"
     assert docs.first_grid_values(lists) == lists  # the shell's quoting: left as written
+
+
+#: Pages whose measured numbers are dated section by section (those of the cards, docs/tasks.md and the
+#: README are generated: test_card_numbers.py): the commands, the day and the commits that last changed
+#: them (git blame on 2026-11-29, not re-measured).
+DATED_PAGES = [
+    "docs/experiments.md",
+    "docs/friction.md",
+    "docs/gaits.md",
+    "docs/parity.md",
+    "docs/packaging.md",
+]
+DATED = re.compile(
+    r"\*Dated: measured with .+; .+ last changed \d{4}-\d\d-\d\d(?: to \d{4}-\d\d-\d\d)? "
+    r"\(commits? [0-9a-f]{7}(?:, [0-9a-f]{7})*, by `git blame`\) and were not measured again since\.\*"
+)
+MEASURED_ROW = re.compile(r"^\|.*\d\.\d")
+
+
+def sections(page: str) -> list[tuple[int, str, list[str]]]:
+    """The page's headings (level, text) and their lines outside fences, up to the next heading."""
+    found = [(0, page, [])]
+    for line in docs.outside_fences((docs.REPO / page).read_text()).split("\n"):
+        heading = re.match(r"^(#{1,6}) (.*)", line)
+        if heading:
+            found.append((len(heading.group(1)), heading.group(2), []))
+        else:
+            found[-1][2].append(line)
+    return found
+
+
+@pytest.mark.parametrize("page", DATED_PAGES)
+def test_a_sections_measured_numbers_are_dated(page):
+    dated_levels: list[int] = []  # the levels of the dated headings above, innermost last
+    undated = []
+    for level, title, lines in sections(page):
+        dated_levels = [lv for lv in dated_levels if lv < level]
+        notes = [line for line in lines if line.startswith("*Dated:")]
+        assert all(DATED.fullmatch(n) for n in notes), (page, title, notes)
+        if notes:
+            dated_levels.append(level)
+        if any(MEASURED_ROW.match(line) for line in lines) and not dated_levels:
+            undated.append(title)
+    assert not undated, f"{page}: sections with measured tables and no *Dated:* line: {undated}"
