@@ -274,6 +274,8 @@ fn run_cell(
         GaitChoice::Sine(_) => period,
         GaitChoice::Library(g) => g.params.ramp,
         GaitChoice::Swim(g) => g.params.ramp,
+        // Maladen et al.'s wave starts whole: one cycle of warm-up.
+        GaitChoice::Sandfish(_) => period,
     };
     let warm = (ramp / period).ceil().max(1.0);
     let seconds = (warm + args.cycles as f64) * period;

@@ -41,13 +41,16 @@ pub struct RunArgs {
     /// Gait: sine (pybullet's snake.py lateral undulation, on every actuated joint in joint order; a
     /// robot file may set the wave's parameters), or one of the library over the robot's yaw and pitch
     /// joints: lateral, sidewind, roll, linear, turn (docs/gaits.md); for water, Kelasidi et al.'s
-    /// swim (lateral undulation) and eel (eel-like motion) over the yaw joints (docs/media.md).
+    /// swim (lateral undulation) and eel (eel-like motion) over the yaw joints; for sand, Maladen et
+    /// al.'s sandfish wave over the yaw joints (docs/media.md).
     #[arg(long, default_value = "sine")]
     pub gait: GaitKind,
     /// A gait parameter KEY=VALUE, repeatable, over the gait's defaults. sine: amplitude, period,
     /// wave_length, segment_length, ramp_segments; the library: amplitude_yaw, amplitude_pitch,
     /// spatial_yaw, spatial_pitch, period, phase, offset_yaw, offset_pitch, ramp; swim and eel: alpha,
-    /// omega, delta, offset (radians, rad/s), ramp.
+    /// omega, delta, offset (radians, rad/s), ramp; sandfish: amplitude, wavelength, segment (metres:
+    /// y = amplitude sin(2 pi (x / wavelength + frequency t)) along the body, each segment at the
+    /// slope of its centre), frequency (Hz); default the robot sandfish's (0.091, 0.455, 0.065, 1).
     #[arg(long = "gait-param", value_name = "KEY=VALUE", value_parser = parse_gait_param, conflicts_with = "targets")]
     pub gait_params: Vec<(String, f64)>,
     /// Joint targets from a CSV instead of the gait (--robot only): header step,<joint names> (any
@@ -593,6 +596,7 @@ pub fn execute(plan: &RunPlan) -> Result<RunReport> {
         }
         (Drive::Gait(GaitChoice::Library(g)), _) => Some(Box::new(g.clone())),
         (Drive::Gait(GaitChoice::Swim(g)), _) => Some(Box::new(g.clone())),
+        (Drive::Gait(GaitChoice::Sandfish(g)), _) => Some(Box::new(g.clone())),
         (Drive::Targets { .. }, _) => None,
     };
     let clock = Instant::now();

@@ -9,6 +9,8 @@
 //!   robot file names one).
 //! - [`swim`]: [`Swim`], Kelasidi et al.'s swimming gaits for water (`swim`: lateral undulation,
 //!   `eel`: eel-like motion), on the yaw joints.
+//! - [`sandfish`]: [`SandfishGait`], Maladen et al.'s travelling sine wave for swimming in sand
+//!   (`sandfish`), on the yaw joints.
 //!
 //! [`GaitChoice::new`] makes any of them by name with `KEY=VALUE` parameters, as `snake-cli run --gait
 //! NAME --gait-param KEY=VALUE` does.
@@ -21,6 +23,7 @@ pub mod steered;
 pub mod swim;
 
 pub use joints::{JointRole, JointRoles};
+pub use sandfish::{SandfishGait, SandfishWave};
 pub use serpenoid::{Serpenoid, SerpenoidParams};
 pub use sine::LateralUndulation;
 pub use steered::SteeredWave;
@@ -56,6 +59,8 @@ pub enum GaitKind {
     Swim,
     /// Kelasidi et al.'s eel-like motion (`eel`, [`Swim`]).
     Eel,
+    /// Maladen et al.'s travelling sine wave for sand (`sandfish`, [`SandfishGait`]).
+    Sandfish,
 }
 
 impl GaitKind {
@@ -73,6 +78,19 @@ impl GaitKind {
     /// atlas draws on the ground.
     pub const SWIMMING: [GaitKind; 2] = [GaitKind::Swim, GaitKind::Eel];
 
+    /// The gait for swimming in sand (docs/media.md), apart from [`GaitKind::ALL`] too: its wave is
+    /// given in metres along the body, for a robot whose segments it is told (the robot sandfish's by
+    /// default).
+    pub const SAND: [GaitKind; 1] = [GaitKind::Sandfish];
+
+    /// Every gait by name: [`GaitKind::ALL`], [`GaitKind::SWIMMING`], [`GaitKind::SAND`].
+    pub fn named() -> impl Iterator<Item = GaitKind> {
+        GaitKind::ALL
+            .into_iter()
+            .chain(GaitKind::SWIMMING)
+            .chain(GaitKind::SAND)
+    }
+
     /// The gait's name on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -84,6 +102,7 @@ impl GaitKind {
             GaitKind::Turn => "turn",
             GaitKind::Swim => "swim",
             GaitKind::Eel => "eel",
+            GaitKind::Sandfish => "sandfish",
         }
     }
 
@@ -92,6 +111,7 @@ impl GaitKind {
         match self {
             GaitKind::Sine => &sine::PARAM_KEYS,
             GaitKind::Swim | GaitKind::Eel => &swim::PARAM_KEYS,
+            GaitKind::Sandfish => &sandfish::PARAM_KEYS,
             _ => &serpenoid::PARAM_KEYS,
         }
     }
@@ -107,21 +127,13 @@ impl std::str::FromStr for GaitKind {
     type Err = crate::Error;
 
     fn from_str(s: &str) -> Result<Self> {
-        GaitKind::ALL
-            .into_iter()
-            .chain(GaitKind::SWIMMING)
-            .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<&str> = GaitKind::ALL
-                    .iter()
-                    .chain(&GaitKind::SWIMMING)
-                    .map(|k| k.name())
-                    .collect();
-                invalid(format!(
-                    "unknown gait '{s}' (expected one of: {})",
-                    names.join(", ")
-                ))
-            })
+        GaitKind::named().find(|k| k.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = GaitKind::named().map(|k| k.name()).collect();
+            invalid(format!(
+                "unknown gait '{s}' (expected one of: {})",
+                names.join(", ")
+            ))
+        })
     }
 }
 
@@ -157,6 +169,8 @@ pub enum GaitChoice {
     Library(Serpenoid),
     /// A swimming gait, over the yaw joints.
     Swim(Swim),
+    /// Maladen et al.'s wave for sand, over the yaw joints.
+    Sandfish(SandfishGait),
 }
 
 impl GaitChoice {
@@ -196,6 +210,19 @@ impl GaitChoice {
                 p.offset += steer;
                 Ok(GaitChoice::Swim(Swim::new(pattern, p, roles)?.with_dt(dt)?))
             }
+            GaitKind::Sandfish => {
+                let mut wave = sandfish::DEFAULTS;
+                for (key, value) in params {
+                    sandfish::set(&mut wave, key, *value)?;
+                }
+                // The wave is a shape in the body's frame; steering it would bend that frame.
+                if steer != 0.0 {
+                    return Err(invalid(format!(
+                        "gait sandfish takes no steering (Maladen et al.'s wave is straight), got {steer}"
+                    )));
+                }
+                Ok(GaitChoice::Sandfish(SandfishGait::new(wave, roles, dt)?))
+            }
             _ => Ok(GaitChoice::Library(Serpenoid::new(
                 kind, roles, params, steer, dt,
             )?)),
@@ -208,6 +235,7 @@ impl GaitChoice {
             GaitChoice::Sine(g) => g.period,
             GaitChoice::Library(g) => g.params.period,
             GaitChoice::Swim(g) => std::f64::consts::TAU / g.params.omega.max(f64::MIN_POSITIVE),
+            GaitChoice::Sandfish(g) => 1.0 / g.wave.frequency,
         }
     }
 }

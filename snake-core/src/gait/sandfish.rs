@@ -10,14 +10,52 @@
 //! with `x_k = -(k + 1/2) segment`, and joint `k` (between segments `k` and `k + 1`) the difference
 //! `theta_(k+1) - theta_k`: the chain follows the curve at its segments' centres. Only yaw joints move;
 //! every other joint holds 0.
+//!
+//! By name: `snake-cli run --gait sandfish --gait-param amplitude=A --gait-param wavelength=L
+//! --gait-param frequency=F --gait-param segment=S` ([`PARAM_KEYS`], over [`DEFAULTS`]: the robot
+//! sandfish's, `robots/sandfish-robot.yaml`).
+
+use serde::Serialize;
 
 use super::joints::{JointRole, JointRoles};
-use super::Gait;
+use super::{Gait, GaitKind};
 use crate::error::{invalid, Result};
 use crate::limits::{check_range_above, GAIT_LENGTH, GAIT_PERIOD};
 
+/// The `--gait-param` keys of `sandfish`, as Maladen et al. name the wave's parameters (metres, Hz).
+pub const PARAM_KEYS: [&str; 4] = ["amplitude", "wavelength", "frequency", "segment"];
+
+/// The wave's defaults: the robot sandfish's (`robots/sandfish-robot.yaml`, docs/media.md): one wave
+/// on its 0.455 m body (seven 0.065 m segments), A/lambda 0.2 (where Maladen et al. found the wave
+/// efficiency highest), 1 Hz.
+pub const DEFAULTS: SandfishWave = SandfishWave {
+    amplitude: 0.091,
+    wavelength: 0.455,
+    frequency: 1.0,
+    segment: 0.065,
+};
+
+/// Sets one parameter of `wave` by its `--gait-param` key; an unknown key lists the known ones.
+pub fn set(wave: &mut SandfishWave, key: &str, value: f64) -> Result<()> {
+    let slot = match key {
+        "amplitude" => &mut wave.amplitude,
+        "wavelength" => &mut wave.wavelength,
+        "frequency" => &mut wave.frequency,
+        "segment" => &mut wave.segment,
+        _ => {
+            return Err(invalid(format!(
+                "unknown gait parameter '{key}' for gait {} (expected one of: {})",
+                GaitKind::Sandfish,
+                PARAM_KEYS.join(", ")
+            )))
+        }
+    };
+    *slot = value;
+    Ok(())
+}
+
 /// The wave's parameters as Maladen et al. define them.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SandfishWave {
     /// Amplitude `A`, metres.
     pub amplitude: f64,
@@ -51,9 +89,10 @@ impl SandfishWave {
 }
 
 /// [`SandfishWave`] on a robot's yaw joints, one physics step at a time.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SandfishGait {
-    wave: SandfishWave,
+    /// The wave it drives.
+    pub wave: SandfishWave,
     yaw: Vec<usize>,
     joints: usize,
     dt: f64,
@@ -135,6 +174,48 @@ mod tests {
         let x = -0.5 * wave.segment;
         let expect = (wave.amplitude * k * (k * (x + wave.wavelength / 4.0)).cos()).atan();
         assert!((later[0] - expect).abs() < 1e-12);
+    }
+
+    #[test]
+    fn parameters_by_name_over_the_robot_sandfishs_defaults() {
+        let mut wave = DEFAULTS;
+        set(&mut wave, "frequency", 1.5).unwrap();
+        set(&mut wave, "amplitude", 0.05).unwrap();
+        assert_eq!(wave.frequency, 1.5);
+        assert_eq!(wave.amplitude, 0.05);
+        assert_eq!(wave.wavelength, 0.455);
+        let e = set(&mut wave, "alpha", 1.0).unwrap_err().to_string();
+        assert!(
+            e.contains("'alpha'") && e.contains("sandfish") && e.contains("amplitude, wavelength"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn by_name_it_is_the_same_wave() {
+        use crate::gait::{GaitChoice, LateralUndulation};
+        let kind: GaitKind = "sandfish".parse().unwrap();
+        let roles = JointRoles::all_yaw(6);
+        let params = [("frequency".to_string(), 1.5)];
+        let dt = 1.0 / 240.0;
+        let choice =
+            GaitChoice::new(kind, &params, 0.0, &roles, LateralUndulation::default(), dt).unwrap();
+        let GaitChoice::Sandfish(mut named) = choice else {
+            panic!("sandfish made {choice:?}");
+        };
+        let wave = SandfishWave {
+            frequency: 1.5,
+            ..DEFAULTS
+        };
+        let mut direct = SandfishGait::new(wave, &roles, dt).unwrap();
+        let (mut a, mut b) = (vec![0.0; 6], vec![0.0; 6]);
+        for _ in 0..100 {
+            named.next_targets(&mut a);
+            direct.next_targets(&mut b);
+            assert_eq!(a, b);
+        }
+        let steered = GaitChoice::new(kind, &[], 0.2, &roles, LateralUndulation::default(), dt);
+        assert!(steered.unwrap_err().to_string().contains("no steering"));
     }
 
     #[test]

@@ -186,7 +186,7 @@ impl Serpenoid {
             ramp: 2.0,
         };
         Some(match kind {
-            GaitKind::Sine | GaitKind::Swim | GaitKind::Eel => return None,
+            GaitKind::Sine | GaitKind::Swim | GaitKind::Eel | GaitKind::Sandfish => return None,
             // Measured on robots/ (docs/gaits.md): a yaw-pitch snake's yaw joints are every other
             // module, so it needs a larger yaw amplitude and, on its isotropic friction, the vertical
             // wave at twice the lateral wave's spatial and temporal frequency, which lifts the body
