@@ -43,7 +43,8 @@ pub struct EnvArgs {
     #[arg(long)]
     pub preset: Option<Preset>,
     /// The task whose defaults the other keywords override: paper (snakesim/Snake-v0), goal
-    /// (SnakeGoal-v0), pegs (SnakePegs-v0) or rough (SnakeRough-v0) (default: paper).
+    /// (SnakeGoal-v0), pegs (SnakePegs-v0), rough (SnakeRough-v0) or swim (SnakeSwim-v0) (default:
+    /// paper).
     #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(
         snake_core::env::Task::ALL.map(snake_core::env::Task::name)
     ))]

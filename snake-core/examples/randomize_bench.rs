@@ -44,6 +44,8 @@ fn main() {
         latency_steps: Some([1.0, 1.0]),
         obs_noise: Some([0.01, 0.01]),
         skin_friction_scale: None,
+        current_speed: None,
+        current_heading: None,
     });
     // A wide distribution: its physics itself costs more or less (other contacts), not the mechanism.
     let distribution = with(Randomize {
@@ -55,6 +57,8 @@ fn main() {
         latency_steps: Some([1.0, 2.0]),
         obs_noise: Some([0.005, 0.01]),
         skin_friction_scale: None,
+        current_speed: None,
+        current_heading: None,
     });
     let mut args = std::env::args().skip(1);
     let steps: usize = args.next().map_or(2_000, |s| s.parse().expect("STEPS"));

@@ -96,4 +96,14 @@ impl Body {
             Body::Robot(r) => r.scale_motors(effort, kp, kd),
         }
     }
+
+    /// Sets the current of every water medium the body swims in (m/s, world frame); false when its
+    /// world has no water.
+    pub fn set_water_current(&mut self, current: nalgebra::Vector3<f64>) -> bool {
+        let media = match self {
+            Body::Cubes(s) => s.media_mut(),
+            Body::Robot(r) => r.media_mut(),
+        };
+        media.is_some_and(|m| m.set_water_current(current))
+    }
 }

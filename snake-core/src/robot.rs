@@ -763,6 +763,11 @@ impl Robot {
         self.media.as_ref()
     }
 
+    /// The media acting on the robot, mutable (randomized physics set the water's current).
+    pub fn media_mut(&mut self) -> Option<&mut MediaState> {
+        self.media.as_mut()
+    }
+
     /// pybullet joint indices of the movable joints.
     pub fn movable_joints(&self) -> &[i32] {
         &self.movable

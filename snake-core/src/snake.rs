@@ -171,6 +171,11 @@ impl Snake {
         self.media.as_ref()
     }
 
+    /// The media acting on the snake, mutable (randomized physics set the water's current).
+    pub fn media_mut(&mut self) -> Option<&mut MediaState> {
+        self.media.as_mut()
+    }
+
     /// Pose and velocity of the base (the head cube).
     pub fn base_state(&self) -> Result<BaseState> {
         self.world.base_state(self.body)

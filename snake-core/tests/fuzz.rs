@@ -80,6 +80,8 @@ prop_compose! {
                 latency_steps: Some(latency),
                 obs_noise: Some(noise),
                 skin_friction_scale: None,
+                current_speed: None,
+                current_heading: None,
             }
         });
         c

@@ -22,6 +22,8 @@ fn nominal() -> Randomize {
         latency_steps: Some([0.0, 0.0]),
         obs_noise: Some([0.0, 0.0]),
         skin_friction_scale: None,
+        current_speed: None,
+        current_heading: None,
     }
 }
 
@@ -35,6 +37,8 @@ fn wide() -> Randomize {
         latency_steps: Some([0.0, 2.0]),
         obs_noise: Some([0.0, 0.02]),
         skin_friction_scale: None,
+        current_speed: None,
+        current_heading: None,
     }
 }
 

@@ -156,7 +156,7 @@ def test_baseline_on_exactly_a_models_env(tmp_path, capsys):
     cli_main(["evaluate", "baseline:gait", "--env-from", str(model), "--episodes", "1", "--json", str(out)])
     assert json.loads(out.read_text())["joints"] == 10
 
-    assert set(TASK_IDS) == {"paper", "goal", *TASKS}
+    assert set(TASK_IDS) == {"paper", "goal", "swim", *TASKS}
     with pytest.raises(AgentError, match="--env-from"):
         load_agent("baseline:steer", env_from="baseline:gait")
     with pytest.raises(AgentError, match="for baselines"):
@@ -524,3 +524,30 @@ def test_a_larger_height_map_sees_farther_and_bad_maps_are_one_line():
         assert "\n" not in str(error.value)
     with pytest.raises(ValueError, match="height_map: needs observation 'terrain'"):
         snakesim.SnakeRoughEnv(height_map={"side": 9})
+
+
+def test_the_swim_task_its_defaults_and_a_steered_mamba_under_a_drawn_current(tmp_path):
+    """``snakesim/SnakeSwim-v0`` (docs/media.md, "Swimming to goals"): the goal task's spaces in the
+    built-in pool, the docstring's defaults; baseline:steer swims mamba-10 to its goals under the
+    current that snake-py/configs/randomize/current.yaml draws, and each episode reports its current."""
+    env = gymnasium.make("snakesim/SnakeSwim-v0", robot=str(ROOT / "robots/mamba-10.yaml"))
+    assert env.observation_space.shape == (2 + 2 * 9 + 8,) and env.action_space.shape == (3,)
+    defaults = json.loads(_core.env_keyword_defaults("swim"))
+    doc = " ".join(type(env.unwrapped).__doc__.split())
+    assert env.spec.max_episode_steps == defaults["max_episode_steps"] == 900 and "900 env steps" in doc
+    d0, d1 = defaults["goal_distribution"]["distance"]
+    assert f"distance [{d0:g}, {d1:g}]" in doc and f"z {defaults['start']['z']:g} m" in doc
+    assert defaults["world"]["files"]["pool.yaml"].startswith("media:")
+    out = tmp_path / "e.json"
+    current = ROOT / "snake-py/configs/randomize/current.yaml"
+    cli_main(
+        ["evaluate", "baseline:steer", "--env", "swim", "--robot", str(ROOT / "robots/mamba-10.yaml")]
+        + ["--randomize", str(current), "--episodes", "2", "--seed", "5", "--json", str(out)]
+    )
+    result = json.loads(out.read_text())
+    assert result["success_rate"] == 1.0, result
+    for episode in result["per_episode"]:
+        assert 0.0 <= episode["physics"]["current_speed"] <= 0.4
+        assert abs(episode["physics"]["current_heading"]) <= np.pi
+    with pytest.raises(ValueError, match="randomize.current_speed: needs a world with water"):
+        snakesim.SnakeGoalEnv(randomize={"current_speed": [0.0, 0.1]})

@@ -464,11 +464,13 @@ pub enum Task {
     Pegs,
     /// A goal across random rough ground with hills (`SnakeRough-v0`): see [`EnvConfig::rough_task`].
     Rough,
+    /// A goal in water (`SnakeSwim-v0`): see [`EnvConfig::swim_task`].
+    Swim,
 }
 
 impl Task {
     /// Every task.
-    pub const ALL: [Task; 4] = [Task::Paper, Task::Goal, Task::Pegs, Task::Rough];
+    pub const ALL: [Task; 5] = [Task::Paper, Task::Goal, Task::Pegs, Task::Rough, Task::Swim];
 
     /// The configuration name.
     pub fn name(self) -> &'static str {
@@ -477,8 +479,24 @@ impl Task {
             Task::Goal => "goal",
             Task::Pegs => "pegs",
             Task::Rough => "rough",
+            Task::Swim => "swim",
         }
     }
+}
+
+/// The swimming task's default world, `pool.yaml`: `worlds/pool.yaml`'s still water, 1 m deep over
+/// the plane and 20 m x 20 m, written here so that the task builds without the repository's files
+/// (a test holds the two to one world). It is recorded in the configuration as its text.
+pub const SWIM_POOL: &str =
+    "media:\n  - {medium: water, area: [-10, -10, 10, 10], surface: 1.0, depth: 1.0}\n";
+
+/// [`SWIM_POOL`] as a world reference (a record of one file, `pool.yaml`).
+pub fn built_in_pool() -> WorldRef {
+    let record = crate::recorded::RecordedFiles {
+        path: "pool.yaml".into(),
+        files: [("pool.yaml".to_owned(), SWIM_POOL.to_owned())].into(),
+    };
+    WorldRef::from_record(&record).expect("the built-in pool is a valid world file")
 }
 
 impl EnvConfig {
@@ -489,6 +507,30 @@ impl EnvConfig {
             Task::Goal => EnvConfig::goal_task(preset, joints),
             Task::Pegs => EnvConfig::pegs_task(preset, joints),
             Task::Rough => EnvConfig::rough_task(preset, joints),
+            Task::Swim => EnvConfig::swim_task(preset, joints),
+        }
+    }
+
+    /// A goal in water (`snakesim/SnakeSwim-v0`, docs/media.md "Swimming to goals"): the goal task's
+    /// actions, observation and reward, a goal 3-6 m from the start in any direction in the plane of
+    /// the surface (the distance is measured across the water, as on the ground), a start 2 cm under a
+    /// surface 1 m up (the body's axis just under water), episodes of at most 900 env steps (30 s), in
+    /// the still pool [`SWIM_POOL`]. Another `world` must have water; a current that pushes is the
+    /// world's water entry, or drawn at each reset by `randomize`'s `current_speed` and
+    /// `current_heading`.
+    pub fn swim_task(preset: Preset, joints: usize) -> Self {
+        EnvConfig {
+            world: Some(built_in_pool()),
+            goal_distribution: Some(GoalDistribution {
+                distance: [3.0, 6.0],
+                ..GoalDistribution::default()
+            }),
+            start: StartDistribution {
+                z: 0.98,
+                ..StartDistribution::default()
+            },
+            max_episode_steps: 900,
+            ..EnvConfig::goal_task(preset, joints)
         }
     }
 
@@ -611,6 +653,16 @@ impl EnvConfig {
         )
     }
 
+    /// Whether the world file has water (a `media` entry `{medium: water}`).
+    pub fn has_water(&self) -> bool {
+        self.world.as_ref().is_some_and(|w| {
+            w.spec()
+                .media
+                .iter()
+                .any(|m| matches!(m, crate::media::Medium::Water(_)))
+        })
+    }
+
     /// Whether the observation ends with the sine and cosine of the wave's phase at the head.
     pub fn observes_wave_phase(&self) -> bool {
         self.observation.is_extended() && self.action.mode.uses_wave()
@@ -685,7 +737,7 @@ impl EnvConfig {
                 None => self.snake.skin_friction.is_some(),
                 Some(r) => r.spec().skin_friction.iter().any(Option::is_some),
             };
-            randomize.validate(has_skin)?;
+            randomize.validate(has_skin, self.has_water())?;
         }
         self.reward.validate()
     }

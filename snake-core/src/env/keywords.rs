@@ -97,6 +97,12 @@ pub fn env_config(
     merge(&mut base, &Value::Object(object));
     let config: EnvConfig = from_value(base, prefix)?;
     config.validate().map_err(|e| under(prefix, e))?;
+    if task == Task::Swim && !config.has_water() {
+        return Err(invalid(format!(
+            "{}: task swim needs a world with water (e.g. world: worlds/pool.yaml, docs/media.md)",
+            at("world")
+        )));
+    }
     Ok(config)
 }
 

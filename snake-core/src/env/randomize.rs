@@ -1,6 +1,6 @@
 //! Randomized physics ([`Randomize`], the env keyword `randomize`): per-episode draws of the ground's
-//! friction, the masses, the motors, the action latency, the observation noise and the skin friction,
-//! as Isaac Lab's event manager and MuJoCo Playground randomize them for transfer to real robots.
+//! friction, the masses, the motors, the action latency, the observation noise, the skin friction and
+//! a water current (the speed and heading of the world's water, docs/media.md), as Isaac Lab's event manager and MuJoCo Playground randomize them for transfer to real robots.
 //!
 //! ## The stream
 //!
@@ -23,8 +23,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{invalid_at, Result};
 use crate::limits::{
-    check_key_interval, short, MAX_LATENCY_STEPS, MAX_OBS_NOISE, MAX_PHYSICS_SCALE,
-    MAX_WORLD_FRICTION, MIN_PHYSICS_SCALE,
+    check_key_interval, short, MAX_CURRENT, MAX_LATENCY_STEPS, MAX_OBS_NOISE, MAX_PHYSICS_SCALE,
+    MAX_WORLD_FRICTION, MAX_YAW, MIN_PHYSICS_SCALE,
 };
 use crate::Body;
 
@@ -48,6 +48,8 @@ pub const NOISE_STREAM: u64 = 0x4f42_534e_4f49_5345;
 ///   latency_steps: [0, 1]          # actions reach the motors this many env steps late
 ///   obs_noise: [0.0, 0.01]         # std of the Gaussian noise on the returned observation
 ///   skin_friction_scale: [0.8, 1.2]   # skin friction coefficients times this (skin bodies only)
+///   current_speed: [0.0, 0.3]      # the water's current, m/s (worlds with water only)
+///   current_heading: [-3.1416, 3.1416]   # its direction, radians from world +x, counterclockwise
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -85,6 +87,15 @@ pub struct Randomize {
     /// has skin friction; only for a body with skin friction.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub skin_friction_scale: Option<[f64; 2]>,
+    /// The speed of the current of every water entry of the world, m/s in [0, [`MAX_CURRENT`]]: the
+    /// drawn current `(s cos h, s sin h, 0)` with `h` from `current_heading` (0, along world +x,
+    /// without it) replaces the world file's; only in a world with water.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub current_speed: Option<[f64; 2]>,
+    /// The current's heading, radians from world +x, counterclockwise, within +-[`MAX_YAW`]; only
+    /// with `current_speed`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub current_heading: Option<[f64; 2]>,
 }
 
 /// The physics one reset drew ([`Randomize`]'s keys that were given, each with its drawn value).
@@ -114,6 +125,12 @@ pub struct Physics {
     /// Factor on the skin friction coefficients.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub skin_friction_scale: Option<f64>,
+    /// The water current's speed, m/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub current_speed: Option<f64>,
+    /// The water current's heading, radians.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub current_heading: Option<f64>,
 }
 
 impl Physics {
@@ -128,6 +145,8 @@ impl Physics {
             ("latency_steps", self.latency_steps.map(f64::from)),
             ("obs_noise", self.obs_noise),
             ("skin_friction_scale", self.skin_friction_scale),
+            ("current_speed", self.current_speed),
+            ("current_heading", self.current_heading),
         ]
         .into_iter()
         .filter_map(|(k, v)| v.map(|v| (k, v)))
@@ -136,8 +155,9 @@ impl Physics {
 
 impl Randomize {
     /// Checks every range; the one-line error names the key (`randomize.mass_scale ...`).
-    /// `has_skin`: whether the body has skin friction (`skin_friction_scale` needs it).
-    pub fn validate(&self, has_skin: bool) -> Result<()> {
+    /// `has_skin`: whether the body has skin friction (`skin_friction_scale` needs it); `has_water`:
+    /// whether the world has water (`current_speed` needs it).
+    pub fn validate(&self, has_skin: bool, has_water: bool) -> Result<()> {
         let scale = (MIN_PHYSICS_SCALE, MAX_PHYSICS_SCALE);
         for (key, range, (low_bound, high_bound)) in [
             (
@@ -156,6 +176,8 @@ impl Randomize {
             ),
             ("obs_noise", self.obs_noise, (0.0, MAX_OBS_NOISE)),
             ("skin_friction_scale", self.skin_friction_scale, scale),
+            ("current_speed", self.current_speed, (0.0, MAX_CURRENT)),
+            ("current_heading", self.current_heading, (-MAX_YAW, MAX_YAW)),
         ] {
             let Some([low, high]) = range else { continue };
             check_key_interval(
@@ -181,6 +203,18 @@ impl Randomize {
                 "needs a body with skin friction (snake.skin_friction, or a robot file's skin_friction)",
             ));
         }
+        if self.current_speed.is_some() && !has_water {
+            return Err(invalid_at(
+                "randomize.current_speed",
+                "needs a world with water (a world file's media: [{medium: water, ...}], docs/media.md)",
+            ));
+        }
+        if self.current_heading.is_some() && self.current_speed.is_none() {
+            return Err(invalid_at(
+                "randomize.current_heading",
+                "needs randomize.current_speed (the heading of which current?)",
+            ));
+        }
         Ok(())
     }
 
@@ -198,6 +232,8 @@ impl Randomize {
             }),
             obs_noise: uniform(rng, self.obs_noise),
             skin_friction_scale: uniform(rng, self.skin_friction_scale),
+            current_speed: uniform(rng, self.current_speed),
+            current_heading: uniform(rng, self.current_heading),
         }
     }
 }
@@ -253,6 +289,16 @@ impl Physics {
                 return Err(invalid_at(
                     "randomize.skin_friction_scale",
                     "needs a body with skin friction",
+                ));
+            }
+        }
+        if let Some(speed) = self.current_speed {
+            let heading = self.current_heading.unwrap_or(0.0);
+            let current = nalgebra::Vector3::new(speed * heading.cos(), speed * heading.sin(), 0.0);
+            if !body.set_water_current(current) {
+                return Err(invalid_at(
+                    "randomize.current_speed",
+                    "needs a world with water",
                 ));
             }
         }

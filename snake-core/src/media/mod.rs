@@ -212,6 +212,19 @@ impl MediaState {
         }
     }
 
+    /// Sets the current of every water medium (m/s, world frame: randomized physics' drawn current);
+    /// false when there is none.
+    pub fn set_water_current(&mut self, current: Vector3<f64>) -> bool {
+        let mut any = false;
+        for medium in &mut self.media {
+            if let Medium::Water(w) = medium {
+                w.current = current;
+                any = true;
+            }
+        }
+        any
+    }
+
     /// The links' geometry, the base first.
     pub fn links(&self) -> &[LinkGeometry] {
         &self.links

@@ -31,8 +31,14 @@ import gymnasium
 
 from snakesim import extras
 from snakesim._core import __version__
-from snakesim.envs.config import ENV_DEFAULTS, GOAL_ENV_DEFAULTS, PEGS_ENV_DEFAULTS, ROUGH_ENV_DEFAULTS
-from snakesim.envs.env import SnakeEnv, SnakeGoalEnv, SnakePegsEnv, SnakeRoughEnv
+from snakesim.envs.config import (
+    ENV_DEFAULTS,
+    GOAL_ENV_DEFAULTS,
+    PEGS_ENV_DEFAULTS,
+    ROUGH_ENV_DEFAULTS,
+    SWIM_ENV_DEFAULTS,
+)
+from snakesim.envs.env import SnakeEnv, SnakeGoalEnv, SnakePegsEnv, SnakeRoughEnv, SnakeSwimEnv
 from snakesim.envs.vector import SnakeVectorEnv
 
 __all__ = [
@@ -40,6 +46,7 @@ __all__ = [
     "SnakeGoalEnv",
     "SnakePegsEnv",
     "SnakeRoughEnv",
+    "SnakeSwimEnv",
     "SnakeVectorEnv",
     "__version__",
     "register_envs",
@@ -51,12 +58,14 @@ ENV_ID = "snakesim/Snake-v0"
 GOAL_ENV_ID = "snakesim/SnakeGoal-v0"
 PEGS_ENV_ID = "snakesim/SnakePegs-v0"
 ROUGH_ENV_ID = "snakesim/SnakeRough-v0"
+SWIM_ENV_ID = "snakesim/SnakeSwim-v0"
 
 
 def register_envs() -> None:
-    """Registers ``snakesim/Snake-v0``, ``snakesim/SnakeGoal-v0``, ``snakesim/SnakePegs-v0`` and
-    ``snakesim/SnakeRough-v0`` with Gymnasium (done on import); ``gymnasium.make_vec`` of each gives
-    the native :class:`SnakeVectorEnv` (Rust threads), with ``gymnasium.make``'s keywords."""
+    """Registers ``snakesim/Snake-v0``, ``snakesim/SnakeGoal-v0``, ``snakesim/SnakePegs-v0``,
+    ``snakesim/SnakeRough-v0`` and ``snakesim/SnakeSwim-v0`` with Gymnasium (done on import);
+    ``gymnasium.make_vec`` of each gives the native :class:`SnakeVectorEnv` (Rust threads), with
+    ``gymnasium.make``'s keywords."""
     # gymnasium.make wraps the env in a TimeLimit of the spec's max_episode_steps (the task's default),
     # or of T with gymnasium.make(..., max_episode_steps=T). That wrapper alone truncates: the env is
     # made with max_episode_steps=None (no limit of its own), so that T may also exceed the default.
@@ -65,6 +74,7 @@ def register_envs() -> None:
         (GOAL_ENV_ID, SnakeGoalEnv, GOAL_ENV_DEFAULTS),
         (PEGS_ENV_ID, SnakePegsEnv, PEGS_ENV_DEFAULTS),
         (ROUGH_ENV_ID, SnakeRoughEnv, ROUGH_ENV_DEFAULTS),
+        (SWIM_ENV_ID, SnakeSwimEnv, SWIM_ENV_DEFAULTS),
     ):
         if env_id not in gymnasium.registry:
             gymnasium.register(

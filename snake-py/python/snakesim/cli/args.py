@@ -89,6 +89,7 @@ TASK_IDS = {
     "goal": "snakesim/SnakeGoal-v0",
     "pegs": "snakesim/SnakePegs-v0",
     "rough": "snakesim/SnakeRough-v0",
+    "swim": "snakesim/SnakeSwim-v0",
 }
 
 
@@ -109,7 +110,7 @@ def baseline_env_options(p: argparse.ArgumentParser) -> None:
         "--env",
         type=task_name,
         metavar="TASK",
-        help="for a baseline: the task, goal (default), paper, pegs or rough, or its Gymnasium id "
+        help="for a baseline: the task, goal (default), paper, pegs, rough or swim, or its Gymnasium id "
         "(snakesim/SnakePegs-v0)",
     )
     p.add_argument(

@@ -25,6 +25,8 @@ GOAL_ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("goal"
 PEGS_ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("pegs"))
 #: The same for the rough-ground task (SnakeRoughEnv, ``snakesim/SnakeRough-v0``).
 ROUGH_ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("rough"))
+#: The same for the swimming task (SnakeSwimEnv, ``snakesim/SnakeSwim-v0``).
+SWIM_ENV_DEFAULTS: dict[str, Any] = json.loads(_core.env_keyword_defaults("swim"))
 #: Keywords holding a mapping of overrides; None means the task's defaults.
 TABLE_KEYWORDS = ("start", "reward", "snake", "action", "terrain", "height_map")
 #: Every keyword an env accepts: ``task`` ("paper" or "goal") picks the defaults the others override.

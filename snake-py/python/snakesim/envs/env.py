@@ -16,6 +16,7 @@ from snakesim.envs.config import ENV_DEFAULTS as _D
 from snakesim.envs.config import GOAL_ENV_DEFAULTS as _G
 from snakesim.envs.config import PEGS_ENV_DEFAULTS as _P
 from snakesim.envs.config import ROUGH_ENV_DEFAULTS as _R
+from snakesim.envs.config import SWIM_ENV_DEFAULTS as _S
 from snakesim.envs.config import action_array, env_config, file_keyword, observation_slice
 from snakesim.envs.render import top_down
 
@@ -122,7 +123,8 @@ class SnakeEnv(gymnasium.Env):
     ``start``'s z on raised ground); ``robot`` and ``world`` also take a record of a file's texts
     (``{"path": ..., "files": {name: text}}``, what a model records: docs/formats.md), ``randomize``
     (None; a mapping of ``ground_friction``, ``mass_scale``, ``effort_scale``, ``kp_scale``,
-    ``kd_scale``, ``latency_steps``, ``obs_noise`` and ``skin_friction_scale`` to ``[low, high]``,
+    ``kd_scale``, ``latency_steps``, ``obs_noise``, ``skin_friction_scale``, ``current_speed`` and
+    ``current_heading`` (a water current, in a world with water) to ``[low, high]``,
     drawn at each reset from that reset's seed on a stream of its own; reset's ``info["physics"]``
     holds the draw; zero-width ranges at the nominal values are the plain env, bit for bit;
     docs/guide.md, "Randomized physics"), ``render_mode`` (None or "rgb_array").
@@ -488,9 +490,58 @@ class SnakeRoughEnv(SnakeGoalEnv):
         )
 
 
+class SnakeSwimEnv(SnakeGoalEnv):
+    """A robot that swims to goals: ``snakesim/SnakeSwim-v0``.
+
+    The goal task (:class:`SnakeGoalEnv`: actions, control rate, observation, reward) in water, with
+    these defaults (snake-core's ``EnvConfig::swim_task``; docs/media.md, "Swimming to goals"):
+
+    - **World**: a still pool, water 1 m deep over the plane, 20 m x 20 m (``world``: the built-in
+      ``pool.yaml``, ``worlds/pool.yaml``'s water; Kelasidi et al.'s hydrodynamics, docs/media.md).
+      Another ``world`` must have water. A current that pushes is the world's water entry
+      (``current``), or drawn at every reset by ``randomize={"current_speed": [low, high],
+      "current_heading": [low, high]}`` (m/s; radians from world +x).
+    - **Goal**: drawn at each reset 3-6 m from the start at any bearing (``goal_distribution``
+      distance [3, 6]), in the plane of the surface: the distance is measured across the water;
+      reached within 1 m.
+    - **Start**: x, y in [-0.5, 0.5] m, yaw in [-0.2, 0.2], z 0.98 m: the body's axis 2 cm under the
+      pool's surface.
+    - **Episode end**: the goal reached (terminated) or 900 env steps, 30 s (truncated).
+
+    - **Observation space**: the goal task's (:class:`SnakeGoalEnv`), ``observation_structure``
+      ``base_position`` (2), ``joint_states`` (2N), ``goal_vector`` (2), ``heading`` (2),
+      ``base_velocity`` (2), ``wave_phase`` (2); the current is not observed (the velocity is over
+      the ground, so drift shows in it). ``observation="terrain"`` appends ``world_up`` (3) and
+      ``height_map`` (side^2) of the ground under the water.
+    - **Arguments**: :class:`SnakeEnv`'s, with the defaults above.
+
+    ``robot="robots/mamba-10.yaml"`` swims NTNU's Mamba as Kelasidi et al. modelled it; the default
+    body is the cube snake, which floats on the surface.
+
+    **Version history** (a change that can change learning bumps ``-vN``; see :class:`SnakeEnv`):
+    v0, initial.
+    """
+
+    task = "swim"
+
+    def __init__(
+        self,
+        goal_distribution: Mapping[str, Any] | None = _S["goal_distribution"],
+        max_episode_steps: int | None = _S["max_episode_steps"],
+        world: str | os.PathLike[str] | Mapping[str, Any] | None = _S["world"],
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(
+            goal_distribution=goal_distribution,
+            max_episode_steps=max_episode_steps,
+            world=world,
+            **kwargs,
+        )
+
+
 #: The env class of each task.
 TASK_ENVS: dict[str, type[SnakeEnv]] = {
-    cls.task: cls for cls in (SnakeEnv, SnakeGoalEnv, SnakePegsEnv, SnakeRoughEnv)
+    cls.task: cls for cls in (SnakeEnv, SnakeGoalEnv, SnakePegsEnv, SnakeRoughEnv, SnakeSwimEnv)
 }
 
 

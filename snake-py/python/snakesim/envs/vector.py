@@ -17,6 +17,7 @@ from snakesim.envs.config import (
     GOAL_ENV_DEFAULTS,
     PEGS_ENV_DEFAULTS,
     ROUGH_ENV_DEFAULTS,
+    SWIM_ENV_DEFAULTS,
     action_array,
     env_config,
 )
@@ -156,3 +157,7 @@ def pegs_vector_env(num_envs: int = 16, **kwargs: Any) -> SnakeVectorEnv:
 
 def rough_vector_env(num_envs: int = 16, **kwargs: Any) -> SnakeVectorEnv:
     return _vector_env("rough", ROUGH_ENV_DEFAULTS, num_envs, kwargs)
+
+
+def swim_vector_env(num_envs: int = 16, **kwargs: Any) -> SnakeVectorEnv:
+    return _vector_env("swim", SWIM_ENV_DEFAULTS, num_envs, kwargs)
