@@ -389,8 +389,16 @@ def run(block: Block, root: Path, text: str) -> None:
 
 
 #: The pages of snake-py/tests/test_doc_examples_more.py (the rest: test_doc_examples.py), two files so
-#: that xdist (one file per worker) runs them on both cores; about half the time each.
-SECOND_HALF = ("docs/experiments.md", "docs/sweeps.md", "docs/deploy.md", "models/")
+#: that xdist (one file per worker) runs them on both cores. Measured 2026-11-29 (CPU seconds of their
+#: commands): README 14, guide 26, tasks 23, formats 9, the rest of docs/ 7, models/[e-g]* 13 in the
+#: first; deploy 20, experiments 18, sweeps 9 (and Ray's start-up, about 20 s of wall time that
+#: is not CPU), models/[p-z]* 20 in the second.
+SECOND_HALF = (
+    "docs/experiments.md",
+    "docs/sweeps.md",
+    "docs/deploy.md",
+    *(f"models/{c}" for c in "pqrstuvwxyz"),
+)
 
 
 def pages_with_examples(second_half: bool) -> list[str]:

@@ -1,6 +1,7 @@
 """The second half of the docs' examples (docs/experiments.md, docs/sweeps.md, docs/deploy.md and the
-model cards; snake-py/tests/_doc_blocks.py's SECOND_HALF), run as snake-py/tests/test_doc_examples.py
-runs the first, in a file of its own so that xdist runs the halves on both cores."""
+model cards from models/p on; snake-py/tests/_doc_blocks.py's SECOND_HALF), run as
+snake-py/tests/test_doc_examples.py runs the first, in a file of its own so that xdist runs the halves
+on both cores."""
 
 from __future__ import annotations
 
