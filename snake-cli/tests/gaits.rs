@@ -163,6 +163,18 @@ fn bad_gait_input_is_one_line_and_writes_nothing() {
             "unknown gait parameter 'wobble'",
         ),
         (
+            &["--gait", "sandfish", "--gait-param", "alpha=0.5"],
+            "unknown gait parameter 'alpha' for gait sandfish",
+        ),
+        (
+            &["--gait", "sandfish", "--gait-param", "wavelength=0"],
+            "gait wavelength must be in (0,",
+        ),
+        (
+            &["--gait", "sandfish", "--steer", "0.1"],
+            "takes no steering",
+        ),
+        (
             &[
                 "--robot",
                 &yp,
@@ -338,4 +350,38 @@ fn atlas_rewrites_its_own_markdown_and_no_input() {
         "{err}"
     );
     assert_eq!(std::fs::read(&copy).unwrap(), before);
+}
+
+#[test]
+fn the_atlas_says_when_the_sand_is_too_fine_for_a_robot() {
+    // The paper's 0.5 m cubes in worlds/sand.yaml's 1 cm elements: more than the limit a link.
+    let dir = std::env::temp_dir().join(format!("snake-cli-atlas-sand-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let md = dir.join("gaits.md");
+    let sand = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../worlds/sand.yaml");
+    let out = snake_cli(&[
+        "atlas",
+        "--robot",
+        &robot("paper-cubes-5.yaml"),
+        "--gait",
+        "sine",
+        "--ground",
+        sand.to_str().unwrap(),
+        "--cycles",
+        "1",
+        "--out",
+        md.to_str().unwrap(),
+        "--figures",
+        dir.join("figures").to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert!(
+        text.contains("| paper-cubes-5 | sine | n/a | | needs coarser sand elements |"),
+        "{text}"
+    );
 }
