@@ -58,6 +58,7 @@ def test_shipped_configs_are_the_papers_four_runs_and_the_agents():
         "pegs-10",
         "robust-yaw-pitch-16",
         "rough-10",
+        "sand-10",
         "swim-10",
     ]
     by_name = dict(zip(names, CONFIGS, strict=True))
