@@ -24,7 +24,8 @@ a `<!-- not run: REASON -->` or `<!-- test: OLD => NEW -->` right after the clos
 that command (INLINE_PAGES, `inline_commands`).
 
 Long commands are shortened by the rules of `shorten` (fewer episodes, a tiny training with short
-episodes and a short imitation, a 2 s simulation); with SNAKESIM_DOC_TESTS=full in the environment they
+episodes and a short imitation, a 2 s simulation), and an evaluation that the page already ran as the
+same shortened command is echoed (`once_per_page`); with SNAKESIM_DOC_TESTS=full in the environment they
 run as written.
 """
 
@@ -405,11 +406,31 @@ def pages_with_examples(second_half: bool) -> list[str]:
     return [p for p in PAGES if blocks(p) and p.startswith(SECOND_HALF) == second_half]
 
 
+def once_per_page(text: str, seen: set[str]) -> str:
+    """A shortened `evaluate` that printed only (no --json) and already ran on the page as the same
+    command (the README's tour and its full-size runs, shortened alike) is echoed, not run again: the
+    same episodes, the same output."""
+    if FULL:
+        return text
+    out = []
+    for line in text.split("\n"):
+        body = " ".join(split_comment(line)[0].split())
+        tool = TOOL.match(body)
+        if tool and tool.group(2) == "evaluate" and "--json" not in body:
+            key = body[tool.start(1) :]  # .venv/bin/snakesim and snakesim alike
+            if key in seen:
+                line = f"echo {shlex.quote('ran above on this page: ' + body)}"
+            seen.add(key)
+        out.append(line)
+    return "\n".join(out)
+
+
 def check_page(page: str, tmp_path: Path) -> None:
     """Runs the page's blocks in order in one folder; fails on the first that fails, naming it."""
     root = sandbox(tmp_path)
     found = blocks(page)
     named = {b.label: b for b in found if b.label}
+    evaluated: set[str] = set()
     ran = []
     for block in found:
         if block.not_run:
@@ -420,7 +441,8 @@ def check_page(page: str, tmp_path: Path) -> None:
         if unknown:
             raise ValueError(f"{block.name}: <!-- test with: {unknown[0]} -->: no block of that name")
         start = time.monotonic()
-        run(block, root, "".join(named[name].prepared() + "\n" for name in block.uses) + block.prepared())
+        text = block.prepared() if block.language == "python" else once_per_page(block.prepared(), evaluated)
+        run(block, root, "".join(named[name].prepared() + "\n" for name in block.uses) + text)
         print(f"{block.name}: {time.monotonic() - start:.1f} s")  # pytest -rP shows each block's time
         ran.append(block.line)
     assert ran == [b.line for b in found if not b.not_run]

@@ -164,3 +164,17 @@ def test_a_sections_measured_numbers_are_dated(page):
         if any(MEASURED_ROW.match(line) for line in lines) and not dated_levels:
             undated.append(title)
     assert not undated, f"{page}: sections with measured tables and no *Dated:* line: {undated}"
+
+
+@pytest.mark.skipif(docs.FULL, reason="SNAKESIM_DOC_TESTS=full: nothing is shortened")
+def test_an_evaluation_the_page_already_ran_is_not_repeated():
+    seen: set[str] = set()
+    first = docs.once_per_page(".venv/bin/snakesim evaluate m --episodes 1  # 1 min", seen)
+    again = docs.once_per_page(
+        "snakesim evaluate m --episodes 1\nsnakesim evaluate m --episodes 1 --json a.json", seen
+    )
+    assert first == ".venv/bin/snakesim evaluate m --episodes 1  # 1 min"
+    assert again.split("\n") == [
+        "echo 'ran above on this page: snakesim evaluate m --episodes 1'",
+        "snakesim evaluate m --episodes 1 --json a.json",  # it writes a file: run again
+    ]
