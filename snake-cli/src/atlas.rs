@@ -42,6 +42,25 @@ const DEFAULT_GROUNDS: [&str; 8] = [
     "worlds/sand-cubes.yaml",
 ];
 
+/// The water rows (issue 60), run after the grid when the atlas runs with its defaults: mamba-10 with
+/// Kelasidi et al.'s two swimming gaits in the still pool, and the same robot with a belly for land
+/// crawling off worlds/amphibious.yaml's shore into its water (robot, gait, ground). The grid's robots
+/// have no business in water (the cubes float on it) and mamba-10 none on the grid's grounds.
+const WATER_CELLS: [(&str, GaitKind, &str); 4] = [
+    ("robots/mamba-10.yaml", GaitKind::Swim, "worlds/pool.yaml"),
+    ("robots/mamba-10.yaml", GaitKind::Eel, "worlds/pool.yaml"),
+    (
+        "robots/mamba-10-amphibious.yaml",
+        GaitKind::Swim,
+        "worlds/amphibious.yaml",
+    ),
+    (
+        "robots/mamba-10-amphibious.yaml",
+        GaitKind::Eel,
+        "worlds/amphibious.yaml",
+    ),
+];
+
 /// Side of the atlas's path pictures, pixels: the table holds 70-odd of them, and at `run`'s 900 they
 /// weigh about 160 KB each.
 const ATLAS_PLOT_SIZE: u32 = 450;
@@ -65,7 +84,9 @@ pub struct AtlasArgs {
     /// A ground (repeatable): plane, or a world file for `snake-cli run --world`. Default: plane,
     /// worlds/slope-10.yaml, worlds/slope-10-up.yaml, worlds/rough.yaml, worlds/pegs.yaml,
     /// worlds/pegs-dense.yaml, worlds/sand.yaml, worlds/sand-cubes.yaml (missing ones are listed as
-    /// pending).
+    /// pending), then, with no --robot, --gait or --ground given, the water rows: mamba-10 swimming
+    /// (swim, eel) in worlds/pool.yaml and robots/mamba-10-amphibious.yaml crawling into
+    /// worlds/amphibious.yaml's water.
     #[arg(long = "ground")]
     pub grounds: Vec<String>,
     /// Gait cycles measured after the warm-up.
@@ -147,13 +168,23 @@ pub fn atlas(args: &AtlasArgs) -> Result<()> {
     } else {
         args.gaits.clone()
     };
-    let grounds: Vec<String> = if args.grounds.is_empty() {
+    let defaults = args.robots.is_empty() && args.gaits.is_empty() && args.grounds.is_empty();
+    let mut grounds: Vec<String> = if args.grounds.is_empty() {
         DEFAULT_GROUNDS.iter().map(|s| s.to_string()).collect()
     } else {
         args.grounds.clone()
     };
+    // (robot, gait, ground) cells beyond the grid: the water rows, with the defaults only.
+    let extra: Vec<(PathBuf, GaitKind, String)> = if defaults {
+        WATER_CELLS
+            .iter()
+            .map(|&(r, g, w)| (PathBuf::from(r), g, w.to_string()))
+            .collect()
+    } else {
+        Vec::new()
+    };
     // Every input is checked before anything is run or written.
-    for r in &robots {
+    for r in robots.iter().chain(extra.iter().map(|(r, ..)| r)) {
         snake_core::RobotSpec::load(r).with_context(|| format!("--robot {}", r.display()))?;
     }
     let md_dir = args
@@ -178,35 +209,46 @@ pub fn atlas(args: &AtlasArgs) -> Result<()> {
         .with_context(|| format!("cannot create {}", args.figures.display()))?;
 
     let mut table: Vec<(String, String, String, Cell)> = Vec::new();
+    let mut cells: Vec<(PathBuf, GaitKind, String)> = Vec::new();
     for ground in &grounds {
         for robot in &robots {
             for &gait in &gaits {
-                let cell = run_cell(robot, gait, ground, args, md_dir)?;
-                if let Cell::Pending(why) = &cell {
-                    // One line per pending ground, not one per cell.
-                    if table.iter().all(|(g, ..)| g != ground) {
-                        say!("{:<10} pending: {why}", ground_label(ground))?;
-                    }
-                    table.push((ground.clone(), stem(robot), gait.name().to_string(), cell));
-                    continue;
-                }
-                let shown = match &cell {
-                    Cell::Done(m, _) => format!(
-                        "{:.3} BL/s, {:.3} BL/cycle, direction {:+.0} deg, turn {:+.1} deg/s",
-                        m.bl_per_s, m.bl_per_cycle, m.direction, m.turn
-                    ),
-                    Cell::NotApplicable(why) => format!("n/a: {why}"),
-                    Cell::Pending(why) => format!("pending: {why}"),
-                };
-                say!(
-                    "{:<10} {:<14} {:<9} {shown}",
-                    ground_label(ground),
-                    stem(robot),
-                    gait.name()
-                )?;
-                table.push((ground.clone(), stem(robot), gait.name().to_string(), cell));
+                cells.push((robot.clone(), gait, ground.clone()));
             }
         }
+    }
+    for (_, _, ground) in &extra {
+        if !grounds.contains(ground) {
+            grounds.push(ground.clone());
+        }
+    }
+    cells.extend(extra);
+    for (robot, gait, ground) in &cells {
+        let gait = *gait;
+        let cell = run_cell(robot, gait, ground, args, md_dir)?;
+        if let Cell::Pending(why) = &cell {
+            // One line per pending ground, not one per cell.
+            if table.iter().all(|(g, ..)| g != ground) {
+                say!("{:<10} pending: {why}", ground_label(ground))?;
+            }
+            table.push((ground.clone(), stem(robot), gait.name().to_string(), cell));
+            continue;
+        }
+        let shown = match &cell {
+            Cell::Done(m, _) => format!(
+                "{:.3} BL/s, {:.3} BL/cycle, direction {:+.0} deg, turn {:+.1} deg/s",
+                m.bl_per_s, m.bl_per_cycle, m.direction, m.turn
+            ),
+            Cell::NotApplicable(why) => format!("n/a: {why}"),
+            Cell::Pending(why) => format!("pending: {why}"),
+        };
+        say!(
+            "{:<10} {:<14} {:<9} {shown}",
+            ground_label(ground),
+            stem(robot),
+            gait.name()
+        )?;
+        table.push((ground.clone(), stem(robot), gait.name().to_string(), cell));
     }
     let generated = render(&table, &grounds, args.cycles);
     let text = splice(existing.as_deref(), &generated);

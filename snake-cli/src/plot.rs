@@ -53,6 +53,8 @@ pub struct PathPlot {
     trace: Vec<(f64, f64)>,
     snapshots: Vec<(f64, Vec<Pose>)>,
     half_extent: f64,
+    /// The world's water, `[x_min, y_min, x_max, y_max]` each, shaded where the drawing reaches it.
+    water: Vec<[f64; 4]>,
 }
 
 impl PathPlot {
@@ -62,7 +64,14 @@ impl PathPlot {
             trace: Vec::new(),
             snapshots: Vec::with_capacity(10),
             half_extent,
+            water: Vec::new(),
         }
+    }
+
+    /// Shades these water areas (`[x_min, y_min, x_max, y_max]`, metres) under the path.
+    pub fn with_water(mut self, areas: Vec<[f64; 4]>) -> Self {
+        self.water = areas;
+        self
     }
 
     /// Adds the head's (the base's) current position to the path.
@@ -127,6 +136,26 @@ impl PathPlot {
                 .light_line_style(RGBColor(235, 235, 235))
                 .draw()
                 .map_err(|e| err(&e))?;
+        }
+        // Water under everything, clipped to the drawing (a pool may reach far beyond the path).
+        let water = RGBColor(170, 205, 240);
+        for (k, [wx0, wy0, wx1, wy1]) in self.water.iter().enumerate() {
+            let (ax0, ax1) = (wx0.max(cx - span / 2.0), wx1.min(cx + span / 2.0));
+            let (ay0, ay1) = (wy0.max(cy - span / 2.0), wy1.min(cy + span / 2.0));
+            if ax0 >= ax1 || ay0 >= ay1 {
+                continue;
+            }
+            let area = chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(ax0, ay0), (ax1, ay1)],
+                    water.mix(0.6).filled(),
+                )))
+                .map_err(|e| err(&e))?;
+            if text && k == 0 {
+                area.label("water").legend(move |(x, y)| {
+                    Rectangle::new([(x + 3, y - 5), (x + 13, y + 5)], water.filled())
+                });
+            }
         }
         let path_series = chart
             .draw_series(LineSeries::new(

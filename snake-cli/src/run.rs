@@ -582,7 +582,21 @@ pub fn execute(plan: &RunPlan) -> Result<RunReport> {
     }];
     let mut work = 0.0;
     let (mut velocities, mut torques) = (vec![0.0; joints], vec![0.0; joints]);
-    let mut path = PathPlot::new(plan.body.draw_half_extent());
+    let water = plan
+        .world_spec()
+        .media
+        .iter()
+        .filter_map(|m| match m {
+            snake_core::media::Medium::Water(w) => Some([
+                w.region.min[0],
+                w.region.min[1],
+                w.region.max[0],
+                w.region.max[1],
+            ]),
+            _ => None,
+        })
+        .collect();
+    let mut path = PathPlot::new(plan.body.draw_half_extent()).with_water(water);
     path.sample(built.sim())?;
     let steps = plan.steps;
     let snapshot_every = (steps / 4).max(1);

@@ -1023,6 +1023,10 @@ pub struct WorldDrawing {
     /// Each obstacle: box (full extents), sphere (radius, 0, 0) or cylinder (radius, height, 0), with
     /// its pose, as a robot's shapes are described.
     pub obstacles: Vec<crate::drawing::ShapeDrawing>,
+    /// Each water region as the box it fills: `[x_min, y_min, z_min, x_max, y_max, z_max]`, `z_max` its
+    /// surface (docs/media.md); left out when there is none, so a dry world's drawing is as before.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub water: Vec<[f64; 6]>,
 }
 
 impl WorldSpec {
@@ -1058,7 +1062,22 @@ impl WorldSpec {
                 }
             })
             .collect();
-        WorldDrawing { ground, obstacles }
+        let water = self
+            .media
+            .iter()
+            .filter_map(|m| match m {
+                Medium::Water(w) => {
+                    let (lo, hi) = (w.region.min, w.region.max);
+                    Some([lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]])
+                }
+                _ => None,
+            })
+            .collect();
+        WorldDrawing {
+            ground,
+            obstacles,
+            water,
+        }
     }
 }
 

@@ -413,3 +413,55 @@ fn a_randomized_current_carries_a_passive_body() {
         "{e}"
     );
 }
+
+/// worlds/amphibious.yaml: mamba-10-amphibious started on the shore crawls off it with Kelasidi et
+/// al.'s lateral undulation, ends wholly in the water, floating where Archimedes puts it (the surface
+/// 0.25 m up, the axis 2.85 cm under it: `mamba_floats_at_the_draft_archimedes_gives`), and swims
+/// there: at least 1 m in its last 10 s.
+#[test]
+fn a_robot_on_the_shore_crawls_into_the_water_and_swims() {
+    use snake_core::gait::{Gait, GaitChoice, GaitKind, JointRoles, LateralUndulation};
+    let spec = RobotSpec::load(&repo().join("robots/mamba-10-amphibious.yaml")).unwrap();
+    let world = WorldRef::load(&repo().join("worlds/amphibious.yaml")).unwrap();
+    let GaitChoice::Swim(mut gait) = GaitChoice::new(
+        GaitKind::Swim,
+        &[],
+        0.0,
+        &JointRoles::of_urdf(&spec.urdf),
+        LateralUndulation::default(),
+        1.0 / 240.0,
+    )
+    .unwrap() else {
+        panic!("swim is a swimming gait");
+    };
+    let mut robot = Robot::in_world(&spec, spec.default_start(), world.spec()).unwrap();
+    let mut q = [0.0; 9];
+    let mut run = |robot: &mut Robot, seconds: usize| {
+        for _ in 0..240 * seconds {
+            gait.next_targets(&mut q);
+            robot.set_targets(&q).unwrap();
+            robot.step().unwrap();
+        }
+    };
+    run(&mut robot, 30);
+    let shore_edge = -0.5;
+    let before = robot.base_state().unwrap().pose.position;
+    run(&mut robot, 10);
+    let after = robot.base_state().unwrap().pose.position;
+    let links = robot.world().link_poses(robot.body()).unwrap();
+    for (k, pose) in links.iter().enumerate() {
+        assert!(
+            pose.position.y < shore_edge,
+            "link {} still over the shore at {:?}",
+            k + 1,
+            pose.position
+        );
+    }
+    assert!(
+        (after.z - (0.25 - 0.0285)).abs() < 1e-3,
+        "the head floats at z {}",
+        after.z
+    );
+    let swum = (after - before).xy().norm();
+    assert!(swum > 1.0, "swam {swum} m in 10 s");
+}

@@ -566,3 +566,25 @@ def test_robot_recording_draws_each_link(snake_cli, tmp_path):
     # The cylinder stands along the link's y axis (its origin's rpy), 0.1 m ahead of the link frame.
     pose = meta["shapes"][2][0]["pose"]
     assert np.allclose(pose[:3], [0, 0.1, 0]) and np.allclose(np.abs(pose[3]), np.sqrt(0.5))
+
+
+def test_an_amphibious_recording_draws_the_shore_and_the_water(snake_cli, tmp_path):
+    """worlds/amphibious.yaml (docs/media.md, "Ground, then water"): the recording holds the shore (an
+    obstacle) and the pool as the translucent box its region fills, from the world file's numbers."""
+    result = subprocess.run(
+        [snake_cli, "run", "--robot", REPO / "robots/mamba-10-amphibious.yaml", "--gait", "swim"]
+        + ["--world", REPO / "worlds/amphibious.yaml", "--seconds", "1", "--rrd", tmp_path / "amph.rrd"],
+        capture_output=True,
+        text=True,
+        env=_env(),
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    entities = read_rrd(tmp_path / "amph.rrd")
+    assert "/world/obstacles/0" in entities and "/world/water/1" not in entities
+    water = entities["/world/water/0"]["static"]
+    (centers,) = [v for k, v in water.items() if k.endswith("centers")]
+    (half,) = [v for k, v in water.items() if k.endswith("half_sizes")]
+    # area [-10, -20, 10, -0.5], surface 0.25, depth 0.25
+    assert np.allclose(centers, [[0.0, -10.25, 0.125]]) and np.allclose(half, [[10.0, 9.75, 0.125]])
+    assert len(entities["/world/snake/link0"]["rows"]) == 240

@@ -1,6 +1,7 @@
 """Drawing a world file's ground and obstacles in Rerun, from the ``world.drawing`` metadata that
 ``snake-cli run --trace`` writes (snake-core's ``WorldSpec::drawing``): a heightfield as a triangle
-mesh through the points where Bullet placed them, a plane as a flat square, obstacles as their shapes."""
+mesh through the points where Bullet placed them, a plane as a flat square, obstacles as their shapes,
+water as the translucent box it fills."""
 
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ import numpy as np
 
 GROUND_COLOR = (150, 140, 120, 255)
 OBSTACLE_COLOR = (120, 120, 140, 255)
+#: Translucent, so that a robot under the surface shows through it.
+WATER_COLOR = (70, 130, 200, 90)
 
 
 def heightfield_triangles(rows: int, columns: int) -> np.ndarray:
@@ -22,8 +25,9 @@ def heightfield_triangles(rows: int, columns: int) -> np.ndarray:
 
 
 def log_world(rr, recording, drawing: Mapping[str, Any], shape_archetype, path: str = "world") -> None:
-    """Logs the world statically under ``path`` (``ground``, ``obstacles/<k>``); ``shape_archetype``
-    turns one shape description into a Rerun archetype (rerun_log's, shared with robots)."""
+    """Logs the world statically under ``path`` (``ground``, ``obstacles/<k>``, ``water/<k>``);
+    ``shape_archetype`` turns one shape description into a Rerun archetype (rerun_log's, shared with
+    robots)."""
     ground = drawing["ground"]
     if ground["kind"] == "heightfield":
         rows, columns = int(ground["rows"]), int(ground["columns"])
@@ -49,3 +53,15 @@ def log_world(rr, recording, drawing: Mapping[str, Any], shape_archetype, path: 
         )
     for k, shape in enumerate(drawing.get("obstacles", [])):
         recording.log(f"{path}/obstacles/{k}", shape_archetype(rr, shape, OBSTACLE_COLOR), static=True)
+    for k, box in enumerate(drawing.get("water", [])):
+        low, high = np.asarray(box[:3], dtype=np.float32), np.asarray(box[3:], dtype=np.float32)
+        recording.log(
+            f"{path}/water/{k}",
+            rr.Boxes3D(
+                half_sizes=[(high - low) / 2],
+                centers=[(high + low) / 2],
+                colors=[WATER_COLOR],
+                fill_mode="solid",
+            ),
+            static=True,
+        )
