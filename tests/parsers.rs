@@ -97,7 +97,8 @@ fn the_seeds_parse() {
         // the shipped ones; this test runs in tests/.
         let text = std::str::from_utf8(&bytes)
             .unwrap()
-            .replace("robot: robots/", &format!("robot: {ROOT}/robots/"));
+            .replace("robot: robots/", &format!("robot: {ROOT}/robots/"))
+            .replace("world: worlds/", &format!("world: {ROOT}/worlds/"));
         let layer = snake_rl::config::parse_yaml(&text).expect("a shipped config parses");
         snake_rl::config::RunConfig::from_layers(&[layer]).expect("a shipped config is valid");
     }
