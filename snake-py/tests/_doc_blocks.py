@@ -227,8 +227,8 @@ def shorten_script(text: str) -> str:
 
 def shorten(command: str) -> str:
     """The rules, each for one kind of long command, as text edits (brace expansions, globs and
-    variables stay the shell's). `--serve` runs until Ctrl-C: the runner's `serve_check` stops it once
-    it has printed its address. `--spawn` and `rerun FILE` open a native viewer, which needs a display:
+    variables stay the shell's). `--serve` runs until Ctrl-C: the runner's `serve_check` runs it on free
+    ports (`--web-port`, `--grpc-port`) and stops it once it has printed its address. `--spawn` and `rerun FILE` open a native viewer, which needs a display:
     the command is echoed, not run."""
     body, comment = split_comment(command)
     words = body.split()
@@ -330,15 +330,23 @@ TIMEOUT = None if FULL else 240
 #: `--serve` runs until Ctrl-C: started, stopped once it has printed its address, which must come.
 SERVE_CHECK = r"""
 serve_check() {
-    setsid "$@" > serve.log 2>&1 &  # its own process group: the viewer's server goes with it
+    # A log of its own: an earlier serve's address must not stop this one before it has started.
+    local log web grpc
+    log=$(mktemp serve-XXXXXX.log)
+    # Free ports, not the defaults (9090, 9876): another test may be serving there at the same time.
+    read -r web grpc < <(python -c 'import socket
+s = [socket.socket() for _ in range(2)]
+for x in s: x.bind(("127.0.0.1", 0))
+print(*(x.getsockname()[1] for x in s))')
+    setsid "$@" --web-port "$web" --grpc-port "$grpc" > "$log" 2>&1 &  # its own process group: the viewer's server goes with it
     local pid=$!
     for _ in $(seq 600); do
         # A background command of a script ignores SIGINT: TERM stands for Ctrl-C.
-        if grep -q 'http://127.0.0.1' serve.log; then kill -TERM -- -$pid; wait $pid || true; return 0; fi
+        if grep -q 'http://127.0.0.1' "$log"; then kill -TERM -- -$pid; wait $pid || true; return 0; fi
         kill -0 $pid 2>/dev/null || break
         sleep 0.1
     done
-    kill -TERM -- -$pid 2>/dev/null; cat serve.log; echo "serve_check: no address from: $*"; return 1
+    kill -TERM -- -$pid 2>/dev/null; cat "$log"; echo "serve_check: no address from: $*"; return 1
 }
 """
 
