@@ -228,8 +228,8 @@ def shorten_script(text: str) -> str:
 def shorten(command: str) -> str:
     """The rules, each for one kind of long command, as text edits (brace expansions, globs and
     variables stay the shell's). `--serve` runs until Ctrl-C: the runner's `serve_check` runs it on free
-    ports (`--web-port`, `--grpc-port`) and stops it once it has printed its address. `--spawn` and `rerun FILE` open a native viewer, which needs a display:
-    the command is echoed, not run."""
+    ports (`--web-port`, `--grpc-port`) and stops it once it has printed its address. `--spawn` and
+    `rerun FILE` open a native viewer, which needs a display: the command is echoed, not run."""
     body, comment = split_comment(command)
     words = body.split()
     if "--spawn" in words or (words and Path(words[0]).name == "rerun"):
@@ -338,7 +338,8 @@ serve_check() {
 s = [socket.socket() for _ in range(2)]
 for x in s: x.bind(("127.0.0.1", 0))
 print(*(x.getsockname()[1] for x in s))')
-    setsid "$@" --web-port "$web" --grpc-port "$grpc" > "$log" 2>&1 &  # its own process group: the viewer's server goes with it
+    # Its own process group: the viewer's server goes with it.
+    setsid "$@" --web-port "$web" --grpc-port "$grpc" > "$log" 2>&1 &
     local pid=$!
     for _ in $(seq 600); do
         # A background command of a script ignores SIGINT: TERM stands for Ctrl-C.
