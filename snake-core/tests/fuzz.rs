@@ -194,3 +194,38 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    // Each case builds a pool and swims 20 env steps (~20 ms).
+    #![proptest_config(ProptestConfig { cases: 60, ..ProptestConfig::default() })]
+
+    /// The swimming task (its built-in pool) under `randomize`'s current, whatever its ranges: finite
+    /// observations and rewards, or a one-line error naming the key.
+    #[test]
+    fn a_randomized_current_is_finite_or_a_typed_error(
+        speed in pair(0.0..2.0),
+        heading in prop::option::of(pair(-7.0..7.0)),
+        seed in any::<u64>(),
+    ) {
+        let mut config = EnvConfig::for_task(snake_core::env::Task::Swim, Preset::Paper, 3);
+        config.randomize = Some(snake_core::Randomize {
+            current_speed: Some(speed),
+            current_heading: heading,
+            ..Default::default()
+        });
+        let mut env = match SnakeEnv::new(config) {
+            Ok(env) => env,
+            Err(e) => {
+                prop_assert!(e.to_string().contains("randomize.current_"), "{e}");
+                return Ok(());
+            }
+        };
+        let (obs, _) = env.reset(Some(seed), ResetOptions::default()).unwrap();
+        prop_assert!(obs.iter().all(|v| v.is_finite()), "reset obs {obs:?}");
+        for _ in 0..20 {
+            let step = env.step(&[0.5f32, 0.0, 0.0]).unwrap();
+            prop_assert!(step.obs.iter().all(|v| v.is_finite()), "obs {:?}", step.obs);
+            prop_assert!(step.reward.is_finite());
+        }
+    }
+}
