@@ -2,7 +2,7 @@
 (snake-py/tests/test_card_numbers.py) checks the card against the last measurement instead of numbers
 copied by hand.
 
-    .venv/bin/python scripts/card_numbers.py pegs-10 [--reuse DIR]
+    .venv/bin/python scripts/card_numbers.py pegs-10|sand-10 [--reuse DIR]
 
 runs, for the card's rows, `snakesim evaluate ... --episodes 100 --seed 900000 --json DIR/ROW.json`
 (about 12 minutes on the 2-core machine for pegs-10: the agent 1.5, `baseline:steer` 5.7,
@@ -28,6 +28,11 @@ CARDS = {
         "agent": ["models/pegs-10.safetensors"],
         "steer": ["baseline:steer", "--env-from", "models/pegs-10.safetensors"],
         "gait": ["baseline:gait", "--env-from", "models/pegs-10.safetensors"],
+    },
+    "sand-10": {
+        "agent": ["models/sand-10.safetensors"],
+        "steer": ["baseline:steer", "--env-from", "models/sand-10.safetensors"],
+        "gait": ["baseline:gait", "--env-from", "models/sand-10.safetensors"],
     },
 }
 EPISODES = ["--episodes", "100", "--seed", "900000"]

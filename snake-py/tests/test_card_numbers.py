@@ -30,7 +30,7 @@ def cells(row: dict) -> str:
 
 
 def test_there_is_a_measurement():
-    assert [p.name for p in MEASURED] == ["pegs-10.json"]
+    assert [p.name for p in MEASURED] == ["pegs-10.json", "sand-10.json"]
 
 
 @pytest.mark.parametrize("path", MEASURED, ids=lambda p: p.stem)
