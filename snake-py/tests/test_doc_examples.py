@@ -129,6 +129,7 @@ DATED_PAGES = [
     "docs/experiments.md",
     "docs/friction.md",
     "docs/gaits.md",
+    "docs/media.md",
     "docs/parity.md",
     "docs/packaging.md",
 ]
