@@ -25,7 +25,7 @@ pub use action::{
 };
 pub use config::{
     EnvConfig, GoalDistribution, ObservationLayout, ObservationPart, ObservationStructure,
-    StartDistribution, Task, MAX_GOAL_DISTANCE,
+    StartDistribution, Task, MAX_GOAL_DISTANCE, SWIM_POOL,
 };
 pub use height_map::{
     HeightMap, HEIGHT_MAP_LEN, HEIGHT_MAP_SIDE, HEIGHT_MAP_SPACING, MAX_HEIGHT_MAP_SIDE,
