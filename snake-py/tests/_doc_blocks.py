@@ -18,15 +18,27 @@ test treats it; the page's reader never sees it:
                                         interpreter (after any prelude): a class defined once on the
                                         page and used by two loops
 
-The model cards' inline commands (`snakesim ...`, `snake-cli ...`, `python ...` in backticks outside a
-fence: "Trained with", "Evaluated with") run too, each as a one-line sh block at its place on the page;
-a `<!-- not run: REASON -->` or `<!-- test: OLD => NEW -->` right after the closing backtick applies to
-that command (INLINE_PAGES, `inline_commands`).
+Every page's inline commands (a code span outside a fence that starts with a tool: `snakesim`,
+`snake-cli`, `python`, `cargo`, `bash`, `scripts/...`, with `.venv/bin/` or `./target/release/` or not;
+"Trained with", "Evaluated with", a command in a sentence) run too, each as a one-line sh block at its
+place on the page; a `<!-- not run: REASON -->` or `<!-- test: OLD => NEW -->` right after the closing
+backtick applies to that command (`inline_commands`). A span that only names a command is left alone,
+by these rules (`is_mention`), so that prose may name commands and flags freely:
+  - it has a placeholder: a word in capitals (`MODEL`, `--robot R`, `T.csv`, `goal-N.yaml`), `...`,
+    `[optional]`, `a|b`, or `<...>`: a synopsis;
+  - it has no argument beyond the tool, its subcommand (`python -m MODULE` or `python SCRIPT`) and bare
+    flags: `snakesim evaluate`, `snake-cli run --rrd`, `snakesim train --resume`, `python -m snakesim`,
+    `scripts/setup --no-demo`: the name of a command or flag.
+Spans in a heading (the section's subject) or a `*Dated:*` note (the section's own commands, repeated)
+are not commands either.
 
 Long commands are shortened by the rules of `shorten` (fewer episodes, a tiny training with short
 episodes and a short imitation, a 2 s simulation), and an evaluation that the page already ran as the
 same shortened command is echoed (`once_per_page`); with SNAKESIM_DOC_TESTS=full in the environment they
-run as written.
+run as written. What the suite itself runs (`cargo test ...`, `python -m pytest ...`, `scripts/test`,
+`scripts/fuzz`) is echoed: scripts/test runs it; so is `cargo build` (scripts/setup's), and
+`cargo doc --open` (a browser). `cargo` runs on the repository's own manifest (`--manifest-path`):
+from the test's folder, whose crates are links, it would build everything again.
 """
 
 from __future__ import annotations
@@ -55,13 +67,15 @@ FENCE = re.compile(r"^(\s*)```(\S*)\s*$")
 MARKER = re.compile(
     r"^\s*<!--\s*(not run|test before|test prelude|test name|test with|test)\s*:\s*(.*?)\s*-->\s*$"
 )
-#: The pages whose inline commands run as well as their blocks: the model cards.
-INLINE_PAGES = ("models/",)
 #: An inline command: a code span that starts with a tool (it may wrap across lines), and the markers
 #: right after it.
 INLINE = re.compile(
-    r"`((?:\.venv/bin/|\./target/release/)?(?:snakesim|snake-cli|python)\s[^`]*)`((?:\s*<!--.*?-->)*)", re.S
+    r"`((?:(?:\.venv/bin/|\./target/release/|venv/bin/)?(?:snakesim|snake-cli|python3?)|cargo|bash"
+    r"|scripts/[\w.-]+)(?:\s[^`]*)?)`((?:\s*<!--.*?-->)*)",
+    re.S,
 )
+#: A synopsis's placeholder: a word in capitals, `...`, `[optional]`, `a|b`, `<...>`.
+PLACEHOLDER = re.compile(r"\.\.\.|\[|\||<|(?<!\w)[A-Z][A-Z0-9_]*\b")
 INLINE_MARKER = re.compile(r"<!--\s*(not run|test)\s*:\s*(.*?)\s*-->", re.S)
 
 #: Run as written, no shortening (slow: full evaluations and trainings).
@@ -117,11 +131,24 @@ class Block:
 
 def blocks(page: str) -> list[Block]:
     """Every ```sh and ```python block of a page (path from the repository root), with its markers, and
-    on the pages of INLINE_PAGES its inline commands, in the order of the page."""
-    found = fenced_blocks(page)
-    if page.startswith(INLINE_PAGES):
-        found = sorted(found + inline_commands(page), key=lambda b: b.line)
-    return found
+    its inline commands, in the order of the page."""
+    return sorted(fenced_blocks(page) + inline_commands(page), key=lambda b: b.line)
+
+
+def is_mention(span: str) -> bool:
+    """Whether an inline span that starts with a tool only names a command (see the module's docstring):
+    a placeholder, or no argument beyond the tool, its subcommand and bare flags."""
+    if PLACEHOLDER.search(span):
+        return True
+    words = span.split()
+    if words[0] == "bash":
+        words = words[1:]
+    tool, rest = Path(words[0]).name, words[1:]
+    if tool in ("snakesim", "snake-cli", "cargo"):
+        rest = rest[1:]
+    elif tool.startswith("python"):
+        rest = rest[2:] if rest[:1] == ["-m"] else rest[1:]
+    return all(word.startswith("-") for word in rest)
 
 
 def parse_substitutions(where: str, value: str) -> list[tuple[str, str]]:
@@ -151,7 +178,11 @@ def inline_commands(page: str) -> list[Block]:
     found = []
     for match in INLINE.finditer(text):
         line = text.count("\n", 0, match.start()) + 1
-        block = Block(page, line, "sh", " ".join(match.group(1).split()) + "\n", inline=True)
+        command = " ".join(match.group(1).split())
+        # A heading names its section's subject; a *Dated:* note repeats the commands its section gives.
+        if is_mention(command) or text[text.rfind("\n", 0, match.start()) + 1 :].startswith(("#", "*Dated:")):
+            continue
+        block = Block(page, line, "sh", command + "\n", inline=True)
         for kind, value in INLINE_MARKER.findall(match.group(2)):
             value = " ".join(value.split())
             if not value:
@@ -208,6 +239,8 @@ def fenced_blocks(page: str) -> list[Block]:
 
 # --- shortening ---------------------------------------------------------------------------------
 
+#: What the test suite itself runs: echoed.
+SUITE = re.compile(r"^(?:cargo test\b|(?:\S*/)?python3? -m pytest\b|(?:bash )?scripts/(?:test|fuzz)\b)")
 #: How a command names the tool, stripped before the rules look at it.
 TOOL = re.compile(r"^(?:\.venv/bin/|venv/bin/|\./target/release/)?(snakesim|snake-cli)\s+(\S+)")
 
@@ -232,8 +265,15 @@ def shorten(command: str) -> str:
     `rerun FILE` open a native viewer, which needs a display: the command is echoed, not run."""
     body, comment = split_comment(command)
     words = body.split()
-    if "--spawn" in words or (words and Path(words[0]).name == "rerun"):
+    if "--spawn" in words or "--open" in words or (words and Path(words[0]).name == "rerun"):
         return f"echo {shlex.quote('not run (needs a display): ' + body.strip())}"
+    if SUITE.match(body.strip()):
+        return f"echo {shlex.quote('run by scripts/test: ' + body.strip())}"
+    if body.strip().startswith("cargo build"):
+        return f"echo {shlex.quote('run by scripts/setup: ' + body.strip())}"
+    if words[:1] == ["cargo"] and len(words) > 1:
+        manifest = f'cargo {words[1]} --manifest-path "$DOCS_REPO/Cargo.toml"'
+        return body.replace(f"cargo {words[1]}", manifest, 1) + comment
     if "--serve" in words:
         return f"serve_check {body.strip()}{comment}"
     tool = TOOL.match(body.strip())
@@ -367,6 +407,7 @@ def environment(root: Path) -> dict[str, str]:
     env = dict(os.environ)
     env["PATH"] = f"{root / '.venv' / 'bin'}:{root / 'target' / 'release'}:{env.get('PATH', '')}"
     env.pop("VIRTUAL_ENV", None)
+    env["DOCS_REPO"] = str(REPO)  # cargo's manifest (shorten)
     env["MPLBACKEND"] = "Agg"
     env["PYTHONUNBUFFERED"] = "1"  # serve_check reads the address as it is printed
     return env

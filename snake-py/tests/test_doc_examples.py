@@ -2,13 +2,14 @@
 
 Each page's ```sh and ```python blocks run in order in a fresh folder laid out as the repository root
 after `bash scripts/setup` (the inputs linked, `out/` empty, no `runs/`), with `.venv/bin` and
-`target/release` on PATH as the README says; so do the model cards' inline commands ("Trained with:
-`snake-cli train ...`"), each at its place. Long commands are shortened (one evaluation episode, a
-512-step training of 200-step episodes, a 2 s simulation; the rules and the markers a page may set:
-snake-py/tests/_doc_blocks.py); SNAKESIM_DOC_TESTS=full runs them as written. A block or command that
-cannot run here says why in its source (`<!-- not run: REASON -->`), and each page's test asserts that
-every other one ran. The pages of docs._doc_blocks.SECOND_HALF run in
-snake-py/tests/test_doc_examples_more.py, on the other core."""
+`target/release` on PATH as the README says; so do the pages' inline commands (a model card's "Trained
+with: `snake-cli train ...`", a command in a sentence), each at its place, unless the span only names a
+command (a placeholder such as `MODEL`, or no argument: `snakesim evaluate`). Long commands are
+shortened (one evaluation episode, a 512-step training of 200-step episodes, a 2 s simulation; the
+rules and the markers a page may set: snake-py/tests/_doc_blocks.py); SNAKESIM_DOC_TESTS=full runs
+them as written. A block or command that cannot run here says why in its source (`<!-- not run:
+REASON -->`), and each page's test asserts that every other one ran. The pages of
+docs._doc_blocks.SECOND_HALF run in snake-py/tests/test_doc_examples_more.py, on the other core."""
 
 from __future__ import annotations
 
@@ -21,9 +22,15 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _doc_blocks as docs  # noqa: E402
 
-#: At most this many blocks and inline commands are not run (19 of 101 on 2026-11-29: installs, setup,
-#: Ray, minutes-long fits and builds, the paper's zip); each says why.
-MOST_NOT_RUN = 20
+#: At most this many blocks and inline commands are not run (35 of 154 on 2026-11-29; each says why):
+#: 19 blocks and card commands (installs, setup, Ray, minutes-long fits and builds, the paper's zip), and
+#: 16 inline commands of docs/ and the cards: 6 benchmarks, imitations and builds of 24 s to 8 minutes
+#: (experiments.md's two bench_train runs, update_bench, candle_update_bench, imitate_controllers;
+#: guide.md's randomize_bench), 3 of Ray's start-ups of 20 s (experiments.md's sweep and its resume,
+#: sweeps.md's resume), 2 card_numbers.py runs (12 minutes, and they rewrite models/measured/), 4 that
+#: need what no test makes (a 7M-step checkpoint, the 15 runs of a plot, the seed-S run of a synopsis,
+#: calibration.md's 5-minute fit's robot) and media.md's abbreviated fit.
+MOST_NOT_RUN = 35
 
 
 @pytest.mark.parametrize("page", docs.pages_with_examples(second_half=False))
@@ -73,6 +80,38 @@ def test_the_cards_inline_commands_are_collected_with_their_markers():
     assert all(b.text.count("\n") == 1 for bs in inline.values() for b in bs)
 
 
+def test_the_docs_inline_commands_run_and_spans_that_name_commands_do_not():
+    guide = [b.text for b in docs.inline_commands("docs/guide.md")]
+    assert "snake-cli run --world worlds/rough.yaml\n" in guide
+    media = [b.text for b in docs.inline_commands("docs/media.md")]
+    assert not any(text.startswith("snakesim validate 'water.*'") for text in media)  # a heading's
+    for span in [
+        "snakesim evaluate MODEL --randomize FILE.yaml",  # placeholders
+        "snake-cli run --robot R --targets T.csv",
+        "snake-cli train --config snake-py/configs/goal-N.yaml",
+        "snakesim replay ...",
+        "snake-cli run --targets ... --output log.csv",
+        "snakesim view FILE.rrd --serve|--spawn",
+        "snake-cli run --robot FILE --gait NAME [--world FILE]",
+        "snakesim evaluate",  # names: no argument
+        "snake-cli run --rrd",
+        "snakesim train --resume",
+        "python -m snakesim",
+        "scripts/setup --no-demo",
+        ".venv/bin/python scripts/bench_env.py",
+    ]:
+        assert docs.is_mention(span), span
+    for span in [
+        "snakesim evaluate baseline:gait",
+        "snake-cli run --world worlds/rough.yaml",
+        "cargo run --release -p snake-core --example gait",
+        ".venv/bin/python -m pytest snake-py/tests/test_calibrate.py -p no:xdist",
+        "bash scripts/fuzz --seconds 3600 urdf",
+        "snakesim validate 'friction.slope-*'",
+    ]:
+        assert not docs.is_mention(span), span
+
+
 #: A command and what the test runs instead.
 SHORTENED = [
     (
@@ -92,6 +131,14 @@ SHORTENED = [
         "snake-cli run --joints 10 --seconds 2 --plot a.png",
     ),
     ("snake-cli run --world w.yaml  # x", "snake-cli run --world w.yaml --seconds 2  # x"),
+    (
+        "cargo run --release -p snake-core --example gait",
+        'cargo run --manifest-path "$DOCS_REPO/Cargo.toml" --release -p snake-core --example gait',
+    ),
+    ("cargo test -p snakesim-tests", "echo 'run by scripts/test: cargo test -p snakesim-tests'"),
+    ("bash scripts/fuzz --seconds 3 urdf", "echo 'run by scripts/test: bash scripts/fuzz --seconds 3 urdf'"),
+    ("cargo build --release -j 2", "echo 'run by scripts/setup: cargo build --release -j 2'"),
+    ("cargo doc -p snake-core --open", "echo 'not run (needs a display): cargo doc -p snake-core --open'"),
 ]
 
 
