@@ -55,15 +55,60 @@ impl HandController {
     /// Writes the actions for `rows` observations of `on`'s env (`obs`: `rows x observation_dim`)
     /// into `actions` (`rows x 3`).
     pub fn act(self, on: &ControlledEnv, obs: &[f32], rows: usize, actions: &mut [f64]) {
+        self.act_holding(on, obs, rows, actions, HeldWave::default());
+    }
+
+    /// [`HandController::act`] with the amplitude and frequency actions at `hold`'s values rather
+    /// than at the middle of their ranges (a run's `init: {imitate: steer, hold: ...}`).
+    pub fn act_holding(
+        self,
+        on: &ControlledEnv,
+        obs: &[f32],
+        rows: usize,
+        actions: &mut [f64],
+        hold: HeldWave,
+    ) {
         for (row, action) in on
             .rows(obs, rows)
             .zip(actions.chunks_exact_mut(GAIT_ACTION_LEN))
         {
-            action.fill(0.0);
-            if self == HandController::Steer {
-                action[0] = steer_towards(on.goal_vector(row));
+            action[0] = match self {
+                HandController::Gait => 0.0,
+                HandController::Steer => steer_towards(on.goal_vector(row)),
+            };
+            action[1] = hold.amplitude;
+            action[2] = hold.frequency;
+        }
+    }
+}
+
+/// The amplitude and frequency actions a gait-action hand controller holds, each in [-1, 1] as the
+/// env's actions are: 0 is the middle of the env's range (what `baseline:gait` and `baseline:steer`
+/// hold), 1 its top. A fixed wave driven harder than the middle can be the better controller (the
+/// sand task's, experiments/sand-patch), and a run can imitate it (`init.hold`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeldWave {
+    /// The amplitude action (0).
+    #[serde(default)]
+    pub amplitude: f64,
+    /// The frequency action (0).
+    #[serde(default)]
+    pub frequency: f64,
+}
+
+impl HeldWave {
+    /// Both finite and in [-1, 1]; the error names the one that is not (`amplitude: ...`).
+    pub fn validate(&self) -> Result<()> {
+        for (key, value) in [("amplitude", self.amplitude), ("frequency", self.frequency)] {
+            if !(-1.0..=1.0).contains(&value) {
+                return Err(invalid_at(
+                    key,
+                    format!("must be an action in [-1, 1], got {value}"),
+                ));
             }
         }
+        Ok(())
     }
 }
 
@@ -261,8 +306,9 @@ impl AssistedEnv {
     }
 }
 
-/// A controller a run can imitate before training (`init: {imitate: NAME}`, snake-rl): it acts in
-/// the env's own action space, so that a policy can be fitted to its actions.
+/// A joint-target controller a run can imitate before training (`init: {imitate: NAME}`, snake-rl;
+/// the gait-action ones are [`HandController`]s, both named by [`crate::imitation::Imitated`]): it
+/// acts in the env's own action space, so that a policy can be fitted to its actions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Imitable {

@@ -43,6 +43,7 @@ pub mod env;
 pub mod error;
 pub mod files;
 pub mod gait;
+pub mod imitation;
 pub mod keys;
 pub mod limits;
 pub mod math;

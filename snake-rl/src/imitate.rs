@@ -3,7 +3,7 @@
 //! be trained to finetune this movement".
 //!
 //! Before PPO, the training envs are driven by a controller in their own action space
-//! ([`JointsSine`]) and every (observation, action) pair is kept ([`collect`]); the actor's mean is
+//! ([`Demonstrator`]: a joint-target wave or a gait-action hand controller) and every (observation, action) pair is kept ([`collect`]); the actor's mean is
 //! then fitted to the actions by behaviour cloning ([`fit`]: mean squared error, Adam, shuffled
 //! minibatches), optionally with the value network fitted to the controller's discounted returns, on
 //! the same network code and optimiser as PPO's update. The trainer then sets the action noise and
@@ -11,7 +11,7 @@
 
 use rand::seq::SliceRandom;
 use rand::Rng;
-use snake_core::controllers::JointsSine;
+use snake_core::imitation::Demonstrator;
 use snake_core::{StepBuffers, VecSnakeEnv};
 
 use crate::config::InitConfig;
@@ -58,7 +58,7 @@ impl Demonstrations {
 /// `Ok(None)` when it said stop.
 #[allow(clippy::too_many_arguments)]
 pub fn collect(
-    controller: &mut JointsSine,
+    controller: &mut Demonstrator,
     envs: &mut VecSnakeEnv,
     out: &mut StepBuffers,
     steps: u64,

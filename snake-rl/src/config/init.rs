@@ -1,7 +1,8 @@
 //! Initialisation by imitation, the run's `init` table.
 
 use serde::{Deserialize, Serialize};
-use snake_core::controllers::{Imitable, JointsSine};
+use snake_core::controllers::HeldWave;
+use snake_core::imitation::{Demonstrator, Imitated};
 use snake_core::keys::integer;
 use snake_core::EnvConfig;
 
@@ -18,8 +19,14 @@ use super::{check_range, check_real, key_err, limits, ConfigError, Schedule};
 #[serde(deny_unknown_fields)]
 pub struct InitConfig {
     /// The controller: `sine` (pybullet snake.py's wave as joint targets) or `steered_sine` (the same
-    /// steered back to the goal's line); see [`Imitable`].
-    pub imitate: Imitable,
+    /// steered back to the goal's line) in the `joints` action mode; `gait` or `steer` (the
+    /// baselines) in the `gait` action mode; see [`Imitated`].
+    pub imitate: Imitated,
+    /// The amplitude and frequency actions `gait` or `steer` hold, each in [-1, 1] (absent: 0 and
+    /// 0, the middle of their ranges, as `baseline:steer`): a harder-driven fixed wave can be the
+    /// better controller to start from (the sand task's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold: Option<HeldWave>,
     /// Env steps of the controller (summed over the envs, 65536).
     #[serde(
         default = "InitConfig::default_steps",
@@ -75,9 +82,10 @@ impl InitConfig {
     }
 
     /// An `init` table imitating `imitate`, every other key its default.
-    pub fn new(imitate: Imitable) -> Self {
+    pub fn new(imitate: impl Into<Imitated>) -> Self {
         InitConfig {
-            imitate,
+            imitate: imitate.into(),
+            hold: None,
             steps: Self::default_steps(),
             epochs: Self::default_epochs(),
             batch_size: Self::default_batch_size(),
@@ -127,8 +135,37 @@ impl InitConfig {
             check_real("init.anchor", anchor.initial(), false)?;
             check_range("init.anchor", anchor.initial(), 0.0, MAX_ANCHOR_WEIGHT)?;
         }
-        JointsSine::new(self.imitate, env, n_envs)
+        let key = if self.hold.is_some() {
+            "init.hold"
+        } else {
+            "init.imitate"
+        };
+        self.demonstrator(env, n_envs)
             .map(drop)
-            .map_err(|e| key_err("init.imitate", e.message()))
+            .map_err(|e| match e {
+                snake_core::Error::InvalidArgument(i) if i.key().is_some() => {
+                    key_err(format!("{key}.{}", i.key().unwrap_or_default()), i.detail())
+                }
+                e => key_err(key, e.message()),
+            })
+    }
+
+    /// The controller as a run's log names it: `steer`, or `steer holding amplitude 0.5, frequency
+    /// 1` with `hold`.
+    pub fn controller_label(&self) -> String {
+        match self.hold {
+            None => self.imitate.name().to_string(),
+            Some(h) => format!(
+                "{} holding amplitude {}, frequency {}",
+                self.imitate.name(),
+                h.amplitude,
+                h.frequency
+            ),
+        }
+    }
+
+    /// The controller bound to `n_envs` envs of `env`.
+    pub fn demonstrator(&self, env: &EnvConfig, n_envs: usize) -> snake_core::Result<Demonstrator> {
+        Demonstrator::new(self.imitate, self.hold, env, n_envs)
     }
 }

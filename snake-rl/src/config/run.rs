@@ -279,6 +279,14 @@ impl RunConfig {
                 ));
             }
             init.validate(&env, self.n_envs)?;
+            if self.steer_assist.is_some() {
+                // Under the assist the policy's steering is added to steer's: the controller's
+                // actions are not what the policy should output.
+                return Err(err(
+                    "init: a run with steer_assist cannot imitate a controller (the policy's \
+                     steering is a correction to steer's); use one or the other",
+                ));
+            }
         }
         let row_bytes = 4 * (env.observation_dim() + env.action_dim() + 8) as u64;
         if rollout.saturating_mul(row_bytes) > MAX_ROLLOUT_BYTES {

@@ -7,7 +7,6 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use snake_core::controllers::JointsSine;
 use snake_core::{StepBuffers, VecSnakeEnv};
 
 use super::{Part, Setup};
@@ -57,7 +56,8 @@ impl Part for Imitate {
         let init = self.init.clone();
         let start = Instant::now();
         let m = run.config.n_envs;
-        let mut controller = JointsSine::new(init.imitate, &run.env_config, m)
+        let mut controller = init
+            .demonstrator(&run.env_config, m)
             .map_err(|e| TrainError::Setup(format!("init.imitate: {}", e.message())))?;
         let mut envs = VecSnakeEnv::new(run.env_config.clone(), m)?;
         envs = if run.threads == 1 {
@@ -147,7 +147,7 @@ impl Part for Imitate {
         observer.on_note(&format!(
             "init: imitated {} for {} env steps (its episodes: mean return {}, success {}), \
              fitted in {} epochs (mse {initial_loss:.4} -> {last:.4}), {seconds:.1} s",
-            init.imitate.name(),
+            init.controller_label(),
             total_steps,
             data.mean_return()
                 .map_or("n/a".into(), |r| format!("{r:.1}")),
