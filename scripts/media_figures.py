@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import re
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -113,32 +114,64 @@ def on_the_surface() -> None:
         print(f"yaw-pitch-16, its gait, 10 s on {name}: moved {moved}")
 
 
-def robot_variant(contact: str = "", spheres: int = 0) -> Path:
+#: Each segment's collision shapes as a function of the segment's centre (x in its link's frame): the
+#: candidates of the study below, beside robots/sandfish-robot.urdf's seven coaxial slices.
+RADIUS, HALF = 0.0175, 0.0325
+AXIS = 'rpy="0 1.5707963267948966 0"'
+
+
+def cylinder_slices(n: int) -> Callable[[float], str]:
+    """The segment's cylinder (0.065 m, radius 0.0175 m) as ``n`` coaxial slices end to end."""
+    length = 2 * HALF / n
+    return lambda c: "".join(
+        f'<collision><origin xyz="{c - HALF + (k + 0.5) * length:.10g} 0 0" {AXIS}/>'
+        f'<geometry><cylinder radius="{RADIUS}" length="{length:.10g}"/></geometry></collision>'
+        for k in range(n)
+    )
+
+
+def capsule(overall: float) -> Callable[[float], str]:
+    """A capsule of the segment's radius, ``overall`` metres end to end (URDF's length: the cylinder part)."""
+    return lambda c: (
+        f'<collision><origin xyz="{c} 0 0" {AXIS}/><geometry><capsule radius="{RADIUS}" '
+        f'length="{overall - 2 * RADIUS:.10g}"/></geometry></collision>'
+    )
+
+
+def spheres(n: int) -> Callable[[float], str]:
+    """``n`` spheres of the segment's radius along it, the end ones touching its ends."""
+    return lambda c: "".join(
+        f'<collision><origin xyz="{c + o:.5f} 0 0"/><geometry><sphere radius="{RADIUS}"/></geometry>'
+        "</collision>"
+        for o in np.linspace(-HALF + RADIUS, HALF - RADIUS, n)
+    )
+
+
+def robot_variant(contact: str = "", collision: Callable[[float], str] | None = None) -> Path:
     """The robot sandfish with a <contact> element on every link (pybullet's soft contact, say) and/or
-    each segment's cylinder replaced, for contact with the ground, by ``spheres`` spheres of its radius
-    along it (a line contact, which Bullet's cylinder-on-plane contact is not)."""
+    each segment's collision shapes replaced by ``collision`` of its centre."""
     text = (ROBOTS / "sandfish-robot.urdf").read_text()
     if contact:
         text = re.sub(r'(<link name="seg\d">)', r"\1" + contact, text)
-    if spheres:
-        radius, half = 0.0175, 0.0325
-
-        def chain(match: re.Match[str]) -> str:
-            centre = float(match.group(1))
-            offsets = np.linspace(-half + radius, half - radius, spheres)
-            return "".join(
-                f'<collision><origin xyz="{centre + o:.5f} 0 0"/><geometry><sphere radius="{radius}"/>'
-                "</geometry></collision>"
-                for o in offsets
-            )
-
-        cylinder = r'<collision><origin xyz="([-0-9.]+) 0 0" rpy="[^"]*"/><geometry><cylinder[^/]*/>'
-        text = re.sub(cylinder + "</geometry></collision>", chain, text)
+    if collision:
+        text = re.sub(r"\s*<collision>.*?</collision>", "", text)
+        visual = r'(<visual><origin xyz="([-0-9.]+) 0 0"[^>]*/>.*?</visual>)'
+        text = re.sub(visual, lambda m: m.group(1) + collision(float(m.group(2))), text)
     folder = Path(tempfile.mkdtemp())
     (folder / "sandfish-robot.urdf").write_text(text)
     robot = folder / "sandfish-robot.yaml"
     robot.write_text((ROBOTS / "sandfish-robot.yaml").read_text())
     return robot
+
+
+def sand_efficiency(robot: Path, frequency: float) -> float:
+    """The wave efficiency of the sand cases (A/lambda 0.2, 8 cm deep) for another robot file."""
+    shipped, sand.ROBOTS = sand.ROBOTS, robot.parent
+    try:
+        forward, wave = sand._sandfish_speed(sand.SAND, 0.2, frequency)
+    finally:
+        sand.ROBOTS = shipped
+    return forward / wave
 
 
 def quasi_static_coulomb(points: str, frequency: float = 0.5, cycles: int = 3) -> float:
@@ -192,24 +225,34 @@ def quasi_static_coulomb(points: str, frequency: float = 0.5, cycles: int = 3) -
 
 
 def rigid_ground() -> None:
-    """Why the robot sandfish advances on rigid flat ground (sand.sandfish-rigid-ground)."""
+    """Why the robot sandfish advanced on rigid flat ground (sand.sandfish-rigid-ground), and the
+    segment shapes tried: each one's advance at 0.5, 1 and 1.5 Hz and its wave efficiency in the sand
+    at the same frequencies."""
     print("robot sandfish on rigid ground: centre of mass's advance along the body's axis, lengths/cycle")
     for f in (0.25, 0.5, 1.0, 1.5):
         print(f"  {f} Hz: {sand.rigid_ground_advance(f).mean():+.4f}")
     for yaw in (30, 45):
-        advance = sand.rigid_ground_advance(0.5, yaw=math.radians(yaw)).mean()
-        print(f"  0.5 Hz, heading {yaw} deg: {advance:+.4f}")
+        for f in (0.5, 1.0):
+            advance = sand.rigid_ground_advance(f, yaw=math.radians(yaw)).mean()
+            print(f"  {f} Hz, heading {yaw} deg: {advance:+.4f}")
     for mu in (0.1, 1.0):
         w = f"ground_friction: {mu}\n"
         print(f"  1 Hz, ground_friction {mu}: {sand.rigid_ground_advance(1.0, world_text=w).mean():+.4f}")
     soft = "<contact><stiffness value='10000'/><damping value='20'/></contact>"
+    soft_name = "soft contacts (stiffness 1e4 N/m, damping 20)"
+    print("segment shapes: rigid ground at 0.5, 1, 1.5 Hz | wave efficiency in the sand at 0.5, 1, 1.5 Hz")
     for name, robot in (
-        ("soft contacts (stiffness 1e4 N/m, damping 20)", robot_variant(soft)),
-        ("9 spheres a segment, rigid", robot_variant(spheres=9)),
-        ("9 spheres a segment, soft", robot_variant(soft, spheres=9)),
+        ("one cylinder (before)", robot_variant(collision=cylinder_slices(1))),
+        (f"one cylinder, {soft_name}", robot_variant(soft, cylinder_slices(1))),
+        ("capsule, 0.065 m end to end", robot_variant(collision=capsule(0.065))),
+        ("capsule, 0.1 m end to end (its ends inside the neighbours)", robot_variant(collision=capsule(0.1))),
+        ("9 spheres", robot_variant(collision=spheres(9))),
+        *((f"{n} slices", robot_variant(collision=cylinder_slices(n))) for n in (2, 3, 5, 7, 9)),
+        (f"7 slices, {soft_name}", robot_variant(soft, cylinder_slices(7))),
     ):
-        for f in (0.5, 1.0):
-            print(f"  {name}, {f} Hz: {sand.rigid_ground_advance(f, robot).mean():+.4f}")
+        rigid = " ".join(f"{sand.rigid_ground_advance(f, robot).mean():+.4f}" for f in (0.5, 1.0, 1.5))
+        eta = " ".join(f"{sand_efficiency(robot, f):.4f}" for f in (0.5, 1.0, 1.5))
+        print(f"  {name}: {rigid} | {eta}")
     for points in ("line", "ends"):
         advance = quasi_static_coulomb(points)
         print(f"  quasi-static isotropic Coulomb, contact on the {points}, 0.5 Hz: {advance:+.4f}")

@@ -123,21 +123,14 @@ def test_the_sandfish_wave_is_maladens_sine_on_the_segments():
         _core.sandfish_targets(str(robot), -1.0, lam, f, seg, 10)
 
 
-#: Quick cases that fail today, with their figure in docs/media.md ("What is not met"): the robot
-#: sandfish's advance on rigid ground (0.032 body lengths a cycle against < 0.02: Bullet's contact between
-#: a cylinder and the plane, docs/media.md "No advance on rigid ground").
-KNOWN_GAPS = {"sand.sandfish-rigid-ground"}
-
-
-def test_the_quick_validation_cases_run_and_pass_but_the_known_gaps():
+def test_the_quick_validation_cases_run_and_pass():
     from snakesim.validation import select
 
     results = [case.run() for case in select([], quick=True)]
-    names = {r.name for r in results}
-    assert KNOWN_GAPS <= names
+    assert "sand.sandfish-rigid-ground" in {r.name for r in results}
     for r in results:
         assert math.isfinite(r.simulated) and math.isfinite(r.published), r
-        assert r.passed or r.name in KNOWN_GAPS, r
+        assert r.passed, r
 
 
 def test_snakesim_validate_names_a_case_or_fails_in_one_line():

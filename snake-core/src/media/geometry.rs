@@ -9,13 +9,16 @@
 //! into `ceil(pi r / e)` latitude bands of `ceil(2 pi r sin(phi) / e)` sectors, each band's area exact
 //! (`2 pi r^2 (cos phi0 - cos phi1)`); a ring has at least 4 sectors. Every element's area is exact
 //! for the surface it stands for, so
-//! the total area is the shape's area at any size, and its point is the element's centre. Shapes of one
-//! link may overlap; their hidden surfaces are not removed (a robot's links are one shape each).
+//! the total area is the shape's area at any size, and its point is the element's centre. Where a
+//! link has several shapes, an element inside another of them is dropped (the faces where they meet,
+//! or where one overlaps another, are inside the body), as [`hide_inner_elements`] drops those inside
+//! another link.
 
 use nalgebra::{UnitQuaternion, Vector3};
 
 use crate::error::{invalid, Result};
 use crate::limits::{MAX_MEDIUM_ELEMENTS, MEDIUM_ELEMENT};
+use crate::media::INNER_TOLERANCE;
 use crate::urdf::Geometry;
 use crate::world::Pose;
 
@@ -150,9 +153,10 @@ pub struct LinkGeometry {
 }
 
 impl LinkGeometry {
-    /// A link of these shapes, its surfaces cut at `element` metres (`None`: no elements). Refuses a
-    /// size that would cut the link into more than [`MAX_MEDIUM_ELEMENTS`] elements; `what` names the
-    /// key in that message.
+    /// A link of these shapes, its surfaces cut at `element` metres (`None`: no elements), less the
+    /// elements that lie inside another of its shapes (within [`INNER_TOLERANCE`]; of two identical
+    /// shapes the first keeps its surface). Refuses a size that would cut the link into more than
+    /// [`MAX_MEDIUM_ELEMENTS`] elements; `what` names the key in that message.
     pub fn new(mass: f64, shapes: Vec<Shape>, element: Option<f64>, what: &str) -> Result<Self> {
         let mut elements = Vec::new();
         if let Some(e) = element {
@@ -163,14 +167,28 @@ impl LinkGeometry {
                     crate::limits::short(e)
                 )));
             }
-            for s in &shapes {
-                let start = elements.len();
-                elements_of(&s.primitive, e, &mut elements);
+            let mut own = Vec::new();
+            for (i, s) in shapes.iter().enumerate() {
+                own.clear();
+                elements_of(&s.primitive, e, &mut own);
                 let (r, t) = (s.pose.orientation, s.pose.position);
-                for el in &mut elements[start..] {
+                for el in &mut own {
                     el.point = r * el.point + t;
                     el.normal = r * el.normal;
                 }
+                // A link drawn as several shapes (slices of one cylinder, say) is one body: the faces
+                // where its shapes meet would otherwise take the medium's stress as outer faces.
+                let hides = |j: usize, o: &Shape, p: &Vector3<f64>| {
+                    let distinct = j < i || o != s;
+                    let local = o.pose.orientation.inverse() * (p - o.pose.position);
+                    j != i && distinct && o.primitive.contains(&local, INNER_TOLERANCE)
+                };
+                elements.extend(own.iter().filter(|el| {
+                    !shapes
+                        .iter()
+                        .enumerate()
+                        .any(|(j, o)| hides(j, o, &el.point))
+                }));
             }
         }
         Ok(LinkGeometry {
@@ -412,6 +430,47 @@ mod tests {
                 assert!(closed.norm() < 1e-12, "{p:?} {e} {closed}");
                 assert!(count as f64 <= p.element_count(e), "{p:?} {e}");
             }
+        }
+    }
+
+    #[test]
+    fn a_link_of_several_shapes_shows_only_their_outer_surface() {
+        // A cylinder cut into seven coaxial slices end to end (robots/sandfish-robot.urdf): the faces
+        // where the slices meet are inside the link, so what is left is the whole cylinder's surface,
+        // 2 pi r L + 2 pi r^2, and closed; a shape given twice counts once.
+        let (radius, length, n) = (0.0175, 0.065, 7);
+        let slice = |k: usize| Shape {
+            primitive: Primitive::Cylinder {
+                radius,
+                length: length / n as f64,
+            },
+            pose: Pose {
+                position: Vector3::new(
+                    0.0,
+                    0.0,
+                    -0.5 * length + (k as f64 + 0.5) * length / n as f64,
+                ),
+                orientation: UnitQuaternion::identity(),
+            },
+        };
+        let whole = 2.0 * std::f64::consts::PI * radius * (length + radius);
+        for shapes in [
+            (0..n).map(slice).collect::<Vec<_>>(),
+            vec![slice(3), slice(3)],
+        ] {
+            let expected = if shapes.len() == 2 {
+                shapes[0].primitive.area()
+            } else {
+                whole
+            };
+            let link = LinkGeometry::new(1.0, shapes, Some(0.01), "element").unwrap();
+            let area: f64 = link.elements.iter().map(|el| el.area).sum();
+            let closed: Vector3<f64> = link.elements.iter().map(|el| el.area * el.normal).sum();
+            assert!(
+                (area - expected).abs() < 1e-12 * expected,
+                "{area} {expected}"
+            );
+            assert!(closed.norm() < 1e-12, "{closed}");
         }
     }
 
