@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from snakesim.validation import Case, Result, relative
-from snakesim.validation.simulate import ROBOTS, robot_gait_targets, run
+from snakesim.validation.simulate import ROBOTS, robot_gait_targets, run, two_halves
 
 HU = "Hu et al. 2009, PNAS 106:10081 (isotropic skin: no net progress)"
 
@@ -57,24 +57,7 @@ def _isotropic_no_progress() -> Result:
 
 #: docs/friction.md's block: 0.2 kg, 0.2 x 0.06 x 0.04 m, as two 0.1 kg halves on a yaw joint held
 #: straight (a robot has at least one joint); the skin axis is each link's +x, the block's length.
-BLOCK = """<?xml version="1.0"?>
-<robot name="block">
-  <link name="a">
-    <inertial><mass value="0.1"/>
-      <inertia ixx="4.333e-05" ixy="0" ixz="0" iyy="9.667e-05" iyz="0" izz="1.133e-04"/></inertial>
-    <collision><geometry><box size="0.1 0.06 0.04"/></geometry></collision>
-  </link>
-  <link name="b">
-    <inertial><origin xyz="-0.05 0 0"/><mass value="0.1"/>
-      <inertia ixx="4.333e-05" ixy="0" ixz="0" iyy="9.667e-05" iyz="0" izz="1.133e-04"/></inertial>
-    <collision><origin xyz="-0.05 0 0"/><geometry><box size="0.1 0.06 0.04"/></geometry></collision>
-  </link>
-  <joint name="j" type="revolute">
-    <parent link="a"/><child link="b"/><origin xyz="-0.05 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-1" upper="1" effort="100" velocity="5"/>
-  </joint>
-</robot>
-"""
+BLOCK = two_halves("block", (0.1, 0.06, 0.04), 0.1)
 SLOPE = math.radians(10.0)
 G = 9.81
 #: Bullet's damping of every multibody link (btMultiBody's default linear damping, pybullet's too):

@@ -19,7 +19,7 @@ import numpy as np
 
 from snakesim.media import probe, rft_alpha
 from snakesim.validation import Case, Result, relative
-from snakesim.validation.simulate import RATE, ROBOTS, run, run_with_joints, sandfish_targets
+from snakesim.validation.simulate import RATE, ROBOTS, run, run_with_joints, sandfish_targets, two_halves
 
 LI = "Li, Zhang & Goldman 2013, Science 339:1408"
 MALADEN = "Maladen et al. 2011, IJRR 30(7):793"
@@ -80,24 +80,7 @@ def _probe(beta: float, gamma: float) -> Result:
 
 
 #: Two 1 kg half-cubes (0.05 x 0.1 x 0.1 m) joined by a yaw joint held straight: a 10 cm cube of 2 kg.
-HALVES = """<?xml version="1.0"?>
-<robot name="halves">
-  <link name="a">
-    <inertial><mass value="1.0"/>
-      <inertia ixx="0.00167" ixy="0" ixz="0" iyy="0.00104" iyz="0" izz="0.00104"/></inertial>
-    <collision><geometry><box size="0.05 0.1 0.1"/></geometry></collision>
-  </link>
-  <link name="b">
-    <inertial><origin xyz="-0.025 0 0"/><mass value="1.0"/>
-      <inertia ixx="0.00167" ixy="0" ixz="0" iyy="0.00104" iyz="0" izz="0.00104"/></inertial>
-    <collision><origin xyz="-0.025 0 0"/><geometry><box size="0.05 0.1 0.1"/></geometry></collision>
-  </link>
-  <joint name="j" type="revolute">
-    <parent link="a"/><child link="b"/><origin xyz="-0.025 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-1" upper="1" effort="100" velocity="5"/>
-  </joint>
-</robot>
-"""
+HALVES = two_halves("halves", (0.05, 0.1, 0.1), 1.0)
 
 
 def _drop_energy() -> Result:

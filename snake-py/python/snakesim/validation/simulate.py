@@ -1,6 +1,6 @@
 """What the validation cases share: the repository's robots, joint targets of a robot file's own gait
-and of Maladen et al.'s travelling sine wave (the gait library's), and a run of a robot in a world
-(``_core.simulate_robot``).
+and of Maladen et al.'s travelling sine wave (the gait library's), a run of a robot in a world
+(``_core.simulate_robot``), and the box of two halves that the friction and sand cases drop and slide.
 """
 
 from __future__ import annotations
@@ -71,3 +71,31 @@ def run_with_joints(
         None if world is None else os.fspath(world),
         start,
     )
+
+
+def two_halves(name: str, size: tuple[float, float, float], mass: float) -> str:
+    """The URDF of a box made of two equal halves end to end along x, each ``size`` (length, width,
+    height; metres) and ``mass`` kg with its box's inertia (to four significant figures, as the cases
+    were first written), joined by a yaw joint where they meet (a robot has at least one joint; the
+    cases hold it straight). The base is the front half; the body lies along -x from its centre."""
+    lx, ly, lz = size
+    inertia = [mass / 12.0 * (b * b + c * c) for b, c in ((ly, lz), (lx, lz), (lx, ly))]
+    box = f'<geometry><box size="{lx!r} {ly!r} {lz!r}"/></geometry>'
+    tensor = '<inertia ixx="{:.4g}" ixy="0" ixz="0" iyy="{:.4g}" iyz="0" izz="{:.4g}"/>'.format(*inertia)
+    back = f'<origin xyz="{-lx / 2!r} 0 0"/>'
+    return f"""<?xml version="1.0"?>
+<robot name="{name}">
+  <link name="a">
+    <inertial><mass value="{mass!r}"/>{tensor}</inertial>
+    <collision>{box}</collision>
+  </link>
+  <link name="b">
+    <inertial>{back}<mass value="{mass!r}"/>{tensor}</inertial>
+    <collision>{back}{box}</collision>
+  </link>
+  <joint name="j" type="revolute">
+    <parent link="a"/><child link="b"/>{back}<axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="100" velocity="5"/>
+  </joint>
+</robot>
+"""
