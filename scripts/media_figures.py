@@ -231,15 +231,16 @@ def rigid_ground() -> None:
     print("robot sandfish on rigid ground: centre of mass's advance along the body's axis, lengths/cycle")
     for f in (0.25, 0.5, 1.0, 1.5):
         print(f"  {f} Hz: {sand.rigid_ground_advance(f).mean():+.4f}")
-    for yaw in (30, 45):
-        for f in (0.5, 1.0):
-            advance = sand.rigid_ground_advance(f, yaw=math.radians(yaw)).mean()
-            print(f"  {f} Hz, heading {yaw} deg: {advance:+.4f}")
+    print("  started at a heading of 0, 15, 30, 45, 60, 90 degrees:")
+    for f in (0.5, 1.0, 1.5):
+        row = (sand.rigid_ground_advance(f, yaw=math.radians(yaw)).mean() for yaw in (0, 15, 30, 45, 60, 90))
+        print(f"    {f} Hz: " + " ".join(f"{a:+.4f}" for a in row))
     for mu in (0.1, 1.0):
         w = f"ground_friction: {mu}\n"
         print(f"  1 Hz, ground_friction {mu}: {sand.rigid_ground_advance(1.0, world_text=w).mean():+.4f}")
     soft = "<contact><stiffness value='10000'/><damping value='20'/></contact>"
     soft_name = "soft contacts (stiffness 1e4 N/m, damping 20)"
+    anchor = "<contact><friction_anchor/></contact>"
     print("segment shapes: rigid ground at 0.5, 1, 1.5 Hz | wave efficiency in the sand at 0.5, 1, 1.5 Hz")
     for name, robot in (
         ("one cylinder (before)", robot_variant(collision=cylinder_slices(1))),
@@ -249,6 +250,7 @@ def rigid_ground() -> None:
         ("9 spheres", robot_variant(collision=spheres(9))),
         *((f"{n} slices", robot_variant(collision=cylinder_slices(n))) for n in (2, 3, 5, 7, 9)),
         (f"7 slices, {soft_name}", robot_variant(soft, cylinder_slices(7))),
+        ("7 slices, friction anchors", robot_variant(anchor, cylinder_slices(7))),
     ):
         rigid = " ".join(f"{sand.rigid_ground_advance(f, robot).mean():+.4f}" for f in (0.5, 1.0, 1.5))
         eta = " ".join(f"{sand_efficiency(robot, f):.4f}" for f in (0.5, 1.0, 1.5))
