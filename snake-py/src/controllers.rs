@@ -5,7 +5,7 @@
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use snake_core::controllers::{Imitable, JointsSine as CoreSine};
+use snake_core::controllers::{HeldWave, Imitable, JointsSine as CoreSine};
 use snake_core::{AssistedEnv, ControlledEnv, HandController, SteerAssist as CoreAssist};
 
 use crate::{parse_config, to_py};
@@ -57,21 +57,31 @@ fn to_array<'py>(py: Python<'py>, values: Vec<f64>, rows: usize) -> PyResult<Bou
         .into_any())
 }
 
-/// hand_actions(name, config_json, obs (n, observation_dim) float32) -> actions (n, 3) float64 of
-/// the hand controller `baseline:NAME` in the env of `config_json` (SnakeEnv's keywords as JSON).
+/// hand_actions(name, config_json, obs (n, observation_dim) float32, amplitude=0.0, frequency=0.0)
+/// -> actions (n, 3) float64 of the hand controller `baseline:NAME` in the env of `config_json`
+/// (SnakeEnv's keywords as JSON), holding the amplitude and frequency actions at the values given
+/// (snake-core's `HeldWave`; 0: the middle of their ranges, as `baseline:NAME` does).
 #[pyfunction]
+#[pyo3(signature = (name, config_json, obs, amplitude=0.0, frequency=0.0))]
 fn hand_actions<'py>(
     py: Python<'py>,
     name: &str,
     config_json: &str,
     obs: PyReadonlyArray2<'py, f32>,
+    amplitude: f64,
+    frequency: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let controller = HandController::from_name(name).map_err(to_py)?;
+    let hold = HeldWave {
+        amplitude,
+        frequency,
+    };
+    hold.validate().map_err(to_py)?;
     let config = parse_config(config_json)?;
     let on = ControlledEnv::of(&config, "the baselines").map_err(to_py)?;
     let (flat, rows) = observations(&obs, on.observation_dim())?;
     let mut out = vec![0.0; rows * snake_core::controllers::GAIT_ACTION_LEN];
-    controller.act(&on, &flat, rows, &mut out);
+    controller.act_holding(&on, &flat, rows, &mut out, hold);
     to_array(py, out, rows)
 }
 

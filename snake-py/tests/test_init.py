@@ -40,7 +40,11 @@ def train(tmp_path, capsys, config, *extra):
     ("init", "extra", "message"),
     [
         ({"imitate": "wiggle"}, [], "init.imitate: unknown controller 'wiggle' (expected one of: sine,"),
-        ({"imitate": "steer", "hold": {"amplitude": 2}}, ["--set", "env.task=goal"], "init.hold.amplitude: must be"),
+        (
+            {"imitate": "steer", "hold": {"amplitude": 2}},
+            ["--set", "env.task=goal"],
+            "init.hold.amplitude: must be",
+        ),
         ({"imitate": "sine", "steps": 0}, [], "init.steps: must be in [1, 4194304], got 0"),
         ({"imitate": "sine", "steps": 10**9}, [], "init.steps: must be in [1, 4194304]"),
         ({"imitate": "sine"}, ["--set", "env.task=goal"], "init.imitate: sine sets joint targets"),

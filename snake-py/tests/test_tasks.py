@@ -163,6 +163,36 @@ def test_baseline_on_exactly_a_models_env(tmp_path, capsys):
         load_agent(str(tmp_path), task="pegs")
 
 
+def test_a_held_wave_is_the_baseline_with_those_two_actions(tmp_path, capsys):
+    """``--hold A,F`` (``load_agent(..., hold=...)``): the same steering as the baseline, the amplitude
+    and frequency actions at A and F instead of 0 (the middle of their ranges); bad values, joint-target
+    baselines and models refused in one line naming ``--hold``."""
+    plain, held = (load_agent("baseline:steer", joints=5, hold=h) for h in (None, (0.5, 1.0)))
+    env = snakesim.envs.env.make_env(**plain.env_kwargs)
+    obs = np.stack([env.reset(seed=s)[0] for s in range(4)])
+    a, b = plain.act(obs), held.act(obs)
+    assert np.array_equal(a[:, 0], b[:, 0]) and np.any(a[:, 0] != 0)
+    assert np.array_equal(a[:, 1:], np.zeros((4, 2))) and np.array_equal(
+        b[:, 1:], np.tile([0.5, 1.0], (4, 1))
+    )
+    assert held.label == "baseline:steer --hold 0.5,1"
+    model = str(ROOT / "models" / "goal-10.safetensors")
+    for args, message in [
+        (["baseline:steer", "--hold", "1.5,0"], "--hold: amplitude: must be an action in [-1, 1], got 1.5"),
+        (["baseline:gait", "--hold", "0,nan"], "--hold: frequency: must be an action in [-1, 1], got NaN"),
+        (["baseline:steer", "--hold", "0.5"], "argument --hold: expected AMPLITUDE,FREQUENCY (two numbers)"),
+        (["baseline:sine", "--env", "paper", "--hold", "0,0"], "--hold: sine sets joint targets"),
+        ([model, "--hold", "0,0"], "--hold is for the gait-action baselines"),
+    ]:
+        try:
+            code = cli_main(["evaluate", *args, "--episodes", "1", "--json", str(tmp_path / "e.json")])
+        except SystemExit as exit_:  # argparse's own refusals
+            code = exit_.code
+        err = capsys.readouterr().err.strip()
+        assert code not in (0, None) and len(err.splitlines()) == 1 and message in err, err
+        assert not (tmp_path / "e.json").exists()
+
+
 def test_a_model_runs_in_the_env_it_was_trained_in_after_a_default_changes(tmp_path):
     """A model's keywords resolve with today's defaults; where that differs from the env it recorded
     at training (as after a change to a task's defaults), the recorded values are pinned, so the agent

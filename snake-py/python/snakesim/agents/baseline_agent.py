@@ -9,7 +9,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from snakesim.agents.protocol import Agent, AgentError
+from snakesim.agents.protocol import Agent, AgentError, Keyword
 
 #: ``baseline:NAME`` names a hand-made controller (snakesim.agents.baselines).
 BASELINE_PREFIX = "baseline:"
@@ -57,10 +57,13 @@ def load_baseline(
     *,
     task: str = "goal",
     source: Agent | None = None,
+    hold: tuple[float, float] | None = None,
 ) -> BaselineAgent:
     """The baseline ``name`` in ``task``'s env (the goal task, ``snakesim/SnakeGoal-v0``, unless told)
     with ``joints`` (5) and ``preset`` (paper), or with ``source`` (an agent) in exactly the env it
-    was trained in, without its assist: the baseline sets every action itself."""
+    was trained in, without its assist: the baseline sets every action itself. ``hold``: a gait-action
+    baseline's amplitude and frequency actions (see :class:`snakesim.agents.baselines.Controller`);
+    its path then reads ``baseline:NAME --hold A,F``."""
     from snakesim.agents import baselines
     from snakesim.envs.config import GOAL_ENV_DEFAULTS
 
@@ -76,12 +79,16 @@ def load_baseline(
             **(env_overrides or {}),
         }
     try:
-        controller = baselines.Controller(name, env_kwargs)
+        controller = baselines.Controller(name, env_kwargs, hold)
     except (TypeError, ValueError) as error:
-        raise AgentError(str(error)) from None
+        message = str(error)
+        if message.startswith("hold: "):
+            raise AgentError(Keyword("hold"), message.removeprefix("hold")) from None
+        raise AgentError(message) from None
+    held = "" if hold is None else f" --hold {hold[0]:g},{hold[1]:g}"
     return BaselineAgent(
         policy=controller,
-        path=BASELINE_PREFIX + name,
+        path=BASELINE_PREFIX + name + held,
         env_kwargs=env_kwargs,
         arch="baseline",
         sb3_version="-",

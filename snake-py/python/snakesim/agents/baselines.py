@@ -53,14 +53,24 @@ class Controller:
     also drives ``steer_assist`` (:class:`snakesim.wrappers.SteerAssist`); its actions are float64,
     the values the env is given. A joint-target one (``sine``, ``steered_sine``) is snake-core's
     ``JointsSine``, a wave per row of the batch: ``restart(i)`` when row i's episode ends
-    (:func:`snakesim.agents.evaluation.run_episodes` does), ``restart()`` before a new run."""
+    (:func:`snakesim.agents.evaluation.run_episodes` does), ``restart()`` before a new run. ``hold``
+    (a gait-action one only): its amplitude and frequency actions, each in [-1, 1], instead of the
+    middle of their ranges (0, 0), e.g. a harder-driven wave (``snakesim evaluate --hold``)."""
 
-    def __init__(self, name: str, env_kwargs: Mapping[str, Any]) -> None:
+    def __init__(
+        self, name: str, env_kwargs: Mapping[str, Any], hold: tuple[float, float] | None = None
+    ) -> None:
         from snakesim.envs.config import env_config
 
         if name not in NAMES:
             raise ValueError(f"unknown baseline {name!r} (expected one of: {', '.join(NAMES)})")
+        if hold is not None and name not in GAIT_NAMES:
+            raise ValueError(
+                f"hold: {name} sets joint targets: only the gait-action baselines ({', '.join(GAIT_NAMES)}) "
+                "hold an amplitude and a frequency"
+            )
         self.name, self._config = name, env_config(**env_kwargs)
+        self._hold = {} if hold is None else {"amplitude": float(hold[0]), "frequency": float(hold[1])}
         # Checks the env once (gait actions and the goal vector, or joint targets), with the core's
         # message.
         env = _core.Env(self._config)
@@ -69,12 +79,19 @@ class Controller:
         if name in JOINT_NAMES:
             _core.JointsSine(name, self._config, 1)
         else:
-            _core.hand_actions(name, self._config, np.zeros((0, env.observation_dim), np.float32))
+            try:
+                _core.hand_actions(
+                    name, self._config, np.zeros((0, env.observation_dim), np.float32), **self._hold
+                )
+            except ValueError as error:
+                # The core checks the held actions before the env: name them as the caller's ``hold``.
+                held = str(error).startswith(("amplitude:", "frequency:"))
+                raise ValueError(f"hold: {error}" if held else str(error)) from None
 
     def act(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
         obs = np.ascontiguousarray(np.atleast_2d(np.asarray(obs, dtype=np.float32)))
         if self.name in GAIT_NAMES:
-            return _core.hand_actions(self.name, self._config, obs)
+            return _core.hand_actions(self.name, self._config, obs, **self._hold)
         if len(obs) == 0:
             return np.zeros((0, self._action_dim), np.float32)
         if self._waves is None or self._waves.envs != len(obs):

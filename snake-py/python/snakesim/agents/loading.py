@@ -70,6 +70,7 @@ def load_agent(
     device: str = "cpu",
     task: str = "goal",
     env_from: str | os.PathLike | None = None,
+    hold: tuple[float, float] | None = None,
 ) -> Agent:
     """A run directory (its final model, else its latest checkpoint; its config.yaml), a bare SB3 zip
     (with the statistics beside it, see :func:`normalizer_beside`) or a native ``.safetensors`` model.
@@ -78,7 +79,8 @@ def load_agent(
     zip, ``joints`` defaults to what the model's action space says and ``preset`` to ``paper``; a
     native model file names its own env. A baseline (``baseline:NAME``) runs in ``task``'s env
     (``goal``, ``pegs``, ``rough``), or with ``env_from`` (a model or run directory) in exactly the env
-    recorded there.
+    recorded there; ``hold`` sets a gait-action baseline's amplitude and frequency actions (each in
+    [-1, 1]; the baselines hold 0, the middle of their ranges).
 
     An :class:`AgentError` about these arguments names them as they are named here (``env_from``);
     ``error.naming({"env_from": "--env-from"})`` names them as a command does.
@@ -86,12 +88,14 @@ def load_agent(
     if isinstance(source, str) and source.startswith(BASELINE_PREFIX):
         name = source.removeprefix(BASELINE_PREFIX)
         if env_from is None:
-            return load_baseline(name, joints, preset, env_overrides, task=task)
+            return load_baseline(name, joints, preset, env_overrides, task=task, hold=hold)
         if joints is not None or preset is not None:
             raise AgentError(
                 Keyword("env_from"), f" takes joints and preset from {os.fspath(env_from)}: leave them out"
             )
-        return load_baseline(name, None, None, env_overrides, source=_env_source(env_from))
+        return load_baseline(name, None, None, env_overrides, source=_env_source(env_from), hold=hold)
+    if hold is not None:
+        raise AgentError(Keyword("hold"), " is for the gait-action baselines (baseline:gait, baseline:steer)")
     if task != "goal" or env_from is not None:
         raise AgentError(
             Keyword("task"),

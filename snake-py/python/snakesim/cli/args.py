@@ -124,6 +124,27 @@ def baseline_env_options(p: argparse.ArgumentParser) -> None:
         metavar="MODEL",
         help="for a baseline: exactly the env recorded in MODEL (a native model or a run directory)",
     )
+    p.add_argument(
+        "--hold",
+        type=held_wave,
+        metavar="AMPLITUDE,FREQUENCY",
+        help="for baseline:gait or baseline:steer: hold the wave's amplitude and frequency actions at these "
+        "values, each in [-1, 1] (default 0,0: the middle of their ranges; 1 is the top)",
+    )
+
+
+def held_wave(text: str) -> tuple[float, float]:
+    """``--hold``'s ``AMPLITUDE,FREQUENCY``: two numbers (their range is the core's to check)."""
+    parts = text.split(",")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        amplitude, frequency = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected AMPLITUDE,FREQUENCY (two numbers), got {text!r}"
+        ) from None
+    return amplitude, frequency
 
 
 def read_randomize(path: str | os.PathLike) -> dict:
@@ -140,7 +161,13 @@ def read_randomize(path: str | os.PathLike) -> dict:
 
 #: The flag of each keyword argument of :func:`snakesim.agents.load_agent`: the loader's errors name
 #: its arguments, and the command names them as its user typed them.
-AGENT_FLAGS = {"joints": "--joints", "preset": "--preset", "task": "--env", "env_from": "--env-from"}
+AGENT_FLAGS = {
+    "joints": "--joints",
+    "preset": "--preset",
+    "task": "--env",
+    "env_from": "--env-from",
+    "hold": "--hold",
+}
 
 
 def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLike, str]] = ()):
@@ -167,6 +194,7 @@ def load_agent(args: argparse.Namespace, outputs: Sequence[tuple[str | os.PathLi
             env_overrides=overrides,
             task=getattr(args, "env", None) or "goal",
             env_from=getattr(args, "env_from", None),
+            hold=getattr(args, "hold", None),
         )
     except AgentError as error:
         raise UserError(error.naming(AGENT_FLAGS)) from None
