@@ -33,6 +33,8 @@ CARDS = {
         "agent": ["models/sand-10.safetensors"],
         "steer": ["baseline:steer", "--env-from", "models/sand-10.safetensors"],
         "gait": ["baseline:gait", "--env-from", "models/sand-10.safetensors"],
+        # The best hand controller found (experiments/sand-patch): steer driving the wave harder.
+        "hold": ["baseline:steer", "--hold", "0.5,1", "--env-from", "models/sand-10.safetensors"],
     },
 }
 EPISODES = ["--episodes", "100", "--seed", "900000"]

@@ -1,6 +1,7 @@
 """`baseline:steer` with the wave's amplitude and frequency actions fixed elsewhere than the middle of
-their ranges (where `baseline:steer` holds them), on the sand task: the best hand controller to hold
-`models/sand-10` against (this folder's README). Usage, from the repository root:
+their ranges (where `baseline:steer` holds them), on the sand task: the search for the best hand
+controller to hold `models/sand-10` against (this folder's README); one pair is `snakesim evaluate
+baseline:steer --hold AMPLITUDE,FREQUENCY --env-from SOURCE`. Usage, from the repository root:
 
     .venv/bin/python experiments/sand-patch/fixed_wave.py SOURCE [EPISODES] [SEED] [AMPLITUDE,FREQUENCY ...]
 
@@ -14,7 +15,6 @@ from __future__ import annotations
 
 import sys
 
-import numpy as np
 from snakesim.agents.baseline_agent import load_baseline
 from snakesim.agents.evaluation import run_episodes, summarize
 from snakesim.agents.loading import load_agent
@@ -27,15 +27,11 @@ def main() -> None:
     pairs = [tuple(float(v) for v in p.split(",")) for p in sys.argv[4:]] or [
         (a, f) for a in (-1.0, 0.0, 1.0) for f in (-1.0, 0.0, 1.0)
     ]
-    steer = load_baseline("steer", None, None, None, source=load_agent(source))
+    model = load_agent(source)
     for amplitude, frequency in pairs:
-
-        def act(obs: np.ndarray, amplitude: float = amplitude, frequency: float = frequency) -> np.ndarray:
-            actions = np.array(steer.act(obs), dtype=np.float64)
-            actions[:, 1], actions[:, 2] = amplitude, frequency  # (steering, amplitude, frequency)
-            return actions
-
-        r = summarize(run_episodes(act, steer.env_kwargs, episodes, seed))
+        # `snakesim evaluate baseline:steer --hold AMPLITUDE,FREQUENCY --env-from SOURCE`, pair by pair.
+        steer = load_baseline("steer", None, None, None, source=model, hold=(amplitude, frequency))
+        r = summarize(run_episodes(steer.act, steer.env_kwargs, episodes, seed))
         low, high = r["success_rate_ci95"]
         seconds = r["mean_seconds_to_goal"]
         time = f"{seconds:.2f} s" if seconds is not None else "-"
