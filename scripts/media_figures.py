@@ -7,7 +7,9 @@
 - printed: a plain drop test (a box dropped into the sand: its depth and vertical speed), the element
   size and `elastic` studies (efficiency and the resting depth against each), the cube snake and
   yaw-pitch-16 on the sand's surface, and why the robot sandfish advances on rigid ground (its
-  frequency, heading and contacts, beside a quasi-static Coulomb model of the same wave written here).
+  frequency, heading and contacts, beside a quasi-static Coulomb model of the same wave written here;
+  Bullet's contacts read through pybullet 3.2.7, which the script needs for that part: the weight's split
+  along the body, the friction against the slip; then the suit's soft contact with isotropic friction).
 
     .venv/bin/python scripts/media_figures.py
 """
@@ -174,16 +176,20 @@ def sand_efficiency(robot: Path, frequency: float) -> float:
     return forward / wave
 
 
-def quasi_static_coulomb(points: str, frequency: float = 0.5, cycles: int = 3) -> float:
+def quasi_static_coulomb(
+    points: str, frequency: float = 0.5, cycles: int = 3, joints: np.ndarray | None = None
+) -> float:
     """The robot sandfish's wave on isotropic Coulomb friction without inertia (Hu et al. 2009's model
     with equal coefficients): at every step the body's rigid motion (vx, vy, w) is the one whose
     friction forces and moment sum to zero, i.e. the minimum of the dissipation sum |v_i| (convex;
     Newton on |v| smoothed by 1e-6 m/s). ``points``: "line" (10 points a segment) or "ends" (the
     segments' ends, where Bullet puts a cylinder's contact). Returns the centre of mass's advance per
-    cycle along the start axis, body lengths, over the last cycle."""
+    cycle along the start axis, body lengths, over the last cycle. ``joints``: joint angles (steps, 6)
+    to use in place of the wave's targets (a run's measured ones)."""
     seg, body = sand.SEGMENT, sand.BODY
     robot = ROBOTS / "sandfish-robot.yaml"
     wave = sand.sandfish_targets(robot, 0.2 * body, body, frequency, seg, cycles / frequency)
+    wave = wave if joints is None else joints
     along = (np.arange(10) + 0.5) / 10 - 0.5 if points == "line" else np.array([-0.5, 0.5])
 
     def shape(joints: np.ndarray) -> np.ndarray:  # in the head's frame, the head's centre at 0
@@ -260,6 +266,175 @@ def rigid_ground() -> None:
         print(f"  quasi-static isotropic Coulomb, contact on the {points}, 0.5 Hz: {advance:+.4f}")
 
 
+def coulomb_rigid_motion(p: np.ndarray, v: np.ndarray, weight: np.ndarray, eps: float = 1e-7) -> np.ndarray:
+    """The rigid motion (vx, vy, w) that, added to contact points ``p`` (n, 2) moving at ``v`` (n, 2),
+    makes isotropic Coulomb forces of magnitude ``weight`` (n,) (mu N) and their moment sum to zero:
+    the minimum of sum weight |v + (vx, vy) + w x p| (convex; Newton on |v| smoothed by ``eps`` m/s)."""
+    a = np.zeros((len(p), 2, 3))
+    a[:, 0, 0], a[:, 1, 1], a[:, 0, 2], a[:, 1, 2] = 1, 1, -p[:, 1], p[:, 0]
+
+    def cost(x: np.ndarray) -> float:
+        return float((weight * np.sqrt(((np.einsum("nij,j->ni", a, x) + v) ** 2).sum(1) + eps**2)).sum())
+
+    x = np.zeros(3)
+    for _ in range(100):
+        s = np.einsum("nij,j->ni", a, x) + v
+        norm = np.sqrt((s**2).sum(1) + eps**2)
+        grad = np.einsum("nji,nj->i", a, weight[:, None] * s / norm[:, None])
+        outer = s[:, :, None] * s[:, None, :] / (norm**3)[:, None, None]
+        m = (np.eye(2)[None] / norm[:, None, None] - outer) * weight[:, None, None]
+        step = np.linalg.solve(np.einsum("nji,njk,nkl->il", a, m, a) + 1e-12 * np.eye(3), grad)
+        t, before = 1.0, cost(x)
+        while t > 1e-12 and cost(x - t * step) > before:
+            t /= 2
+        x = x - t * step
+        if np.abs(t * step).max() < 1e-13:
+            break
+    return x
+
+
+def bullet_contacts(frequency: float, urdf: Path, cone: bool = True, yaw: float = 0.0) -> str:
+    """sand.rigid_ground_advance's run replayed in pybullet 3.2.7 (the same steps, bit for bit, for the
+    robot file's URDF), reading Bullet's contacts in its last three cycles: each segment's normal force
+    (least and most over the cycles), the net friction force on the body (its mass times the centre of
+    mass's acceleration) beside mu W, the joints' tracking error and :func:`quasi_static_coulomb` with the
+    measured joint angles, the friction's angle off the slip (loaded
+    contacts sliding faster than 1 mm/s), and the advance beside what isotropic
+    quasi-static Coulomb friction gives on Bullet's own contact points and normal forces
+    (:func:`coulomb_rigid_motion` at every step, its centre-of-mass velocity added to Bullet's)."""
+    import pybullet as p  # the reference environment's (bash scripts/test adds it to .venv)
+    from pybullet_utils import bullet_client
+
+    robot = ROBOTS / "sandfish-robot.yaml"
+    per, hold, cycles = int(round(RATE / frequency)), int(RATE), 3
+    wave = sand.sandfish_targets(
+        robot, 0.2 * sand.BODY, sand.BODY, frequency, sand.SEGMENT, (cycles + 1) / frequency
+    )
+    targets = np.concatenate([np.repeat(wave[:1], hold, axis=0), wave])
+    c = bullet_client.BulletClient(connection_mode=p.DIRECT)
+    plane = c.createMultiBody(0, c.createCollisionShape(p.GEOM_PLANE))
+    c.changeDynamics(plane, -1, lateralFriction=0.3)  # RIGID's ground_friction
+    body = c.loadURDF(
+        str(urdf), [0, 0, 0.0175], c.getQuaternionFromEuler([0, 0, yaw]), flags=p.URDF_USE_INERTIA_FROM_FILE
+    )
+    c.setGravity(0, 0, -9.81)
+    if not cone:
+        c.setPhysicsEngineParameter(enableConeFriction=0)
+    joints = list(range(c.getNumJoints(body)))
+    efforts = [c.getJointInfo(body, j)[10] for j in joints]
+    base, q, contacts = [], [], []
+    for k, row in enumerate(targets):
+        c.setJointMotorControlArray(
+            body,
+            joints,
+            p.POSITION_CONTROL,
+            targetPositions=list(row),
+            forces=efforts,
+            positionGains=[0.5] * len(joints),
+            velocityGains=[1.0] * len(joints),
+        )
+        c.stepSimulation()
+        pos, orn = c.getBasePositionAndOrientation(body)
+        base.append([*pos, *orn])
+        q.append([s[0] for s in c.getJointStates(body, joints)])
+        if k < hold + per - 1:
+            continue
+        points = []
+        for cp in c.getContactPoints(bodyA=body):
+            link, at = cp[3], np.array(cp[5])
+            if link < 0:
+                (com, _), (lin, ang) = c.getBasePositionAndOrientation(body), c.getBaseVelocity(body)
+            else:
+                state = c.getLinkState(body, link, computeLinkVelocity=1)
+                com, lin, ang = state[0], state[6], state[7]
+            velocity = np.array(lin) + np.cross(ang, at - np.array(com))
+            friction = cp[10] * np.array(cp[11]) + cp[12] * np.array(cp[13])
+            points.append((link + 1, cp[9], *at[:2], *velocity[:2], *friction[:2], cp[8]))
+        contacts.append(np.array(points))
+    c.disconnect()
+    base, q = np.array(base), np.array(q)
+    centres = sand.segment_centres(base, q)
+    com = centres.mean(axis=1)
+    first = hold + per - 1
+    load = np.array([np.bincount(r[:, 0].astype(int), r[:, 1], minlength=7) for r in contacts])
+    net = np.array([np.hypot(*r[:, 6:8].sum(0)) for r in contacts])
+    sliding = np.concatenate([r[(np.hypot(r[:, 4], r[:, 5]) > 1e-3) & (r[:, 1] > 0)] for r in contacts])
+    off = np.degrees(
+        np.abs(
+            np.arctan2(
+                sliding[:, 5] * sliding[:, 6] - sliding[:, 4] * sliding[:, 7],
+                -(sliding[:, 4] * sliding[:, 6] + sliding[:, 5] * sliding[:, 7]),
+            )
+        )
+    )
+    measured = quasi_static_coulomb("line", frequency, joints=q[first : first + 2 * per + 1])
+    shift = np.array(
+        [
+            coulomb_rigid_motion(r[:, 2:4] - com[first + i], r[:, 4:6], r[:, 1])[:2]
+            for i, r in enumerate(contacts)
+        ]
+    )
+    bullet, coulomb = [], []
+    for n in range(cycles):
+        a = first + n * per
+        axis = (centres[a : a + per, 0] - centres[a : a + per, -1]).mean(axis=0)
+        axis /= np.linalg.norm(axis)
+        bullet.append((com[a + per] - com[a]) @ axis / sand.BODY)
+        coulomb.append(bullet[-1] + shift[n * per : (n + 1) * per].sum(0) / RATE @ axis / sand.BODY)
+    weight = 0.13 * 7 * 9.81
+    tracking = np.sqrt(((q[first:] - targets[first:]) ** 2).mean())
+    return (
+        f"advance {np.mean(bullet):+.4f}, quasi-static Coulomb on Bullet's contacts {np.mean(coulomb):+.4f}; "
+        f"segment loads (N, weight {weight / 7:.2f}) least {' '.join(f'{v:.2f}' for v in load.min(0))}, "
+        f"most {' '.join(f'{v:.2f}' for v in load.max(0))}; net friction {net.mean():.3f} N "
+        f"(mu W {0.15 * weight:.2f}); tracking {tracking:.4f} rad rms, quasi-static Coulomb with these "
+        f"joint angles {measured:+.4f}; the friction off the slip (loaded, sliding contacts) by "
+        f"{np.median(off):.1f} degrees (median), {np.percentile(off, 90):.1f} (90th percentile); the loaded "
+        f"points' mean depth {-1000 * np.concatenate([r[r[:, 1] > 0, 8] for r in contacts]).mean():.4f} mm"
+    )
+
+
+def rigid_ground_causes() -> None:
+    """What makes the robot sandfish advance on rigid ground at 0.5 Hz (docs/media.md, "No advance on
+    rigid ground", the checks in order): Bullet's friction (cone, pyramid, snakesim's isotropic Coulomb
+    skin), the joints' tracking and inertia, the weight's split along the body; then the suit's soft
+    contact with isotropic friction (sand.suit_on_floor, the cases' robot) against its stiffness."""
+    urdf = ROBOTS / "sandfish-robot.urdf"
+    soft = robot_variant(sand.SUIT_CONTACT)
+    print("Bullet's contacts (pybullet 3.2.7, heading 0, rigid contacts unless said):")
+    for f in (0.25, 0.5, 1.0, 1.5):
+        print(f"  {f} Hz: {bullet_contacts(f, urdf)}")
+    print(f"  0.5 Hz, heading 45: {bullet_contacts(0.5, urdf, yaw=math.radians(45))}")
+    print(f"  0.5 Hz, pyramid friction: {bullet_contacts(0.5, urdf, cone=False)}")
+    print(f"  0.5 Hz, the suit's soft contact: {bullet_contacts(0.5, soft.parent / 'sandfish-robot.urdf')}")
+    stiff = robot_variant('<contact><stiffness value="1e5"/><damping value="20"/></contact>')
+    print(f"  0.5 Hz, soft contact 1e5 N/m: {bullet_contacts(0.5, stiff.parent / 'sandfish-robot.urdf')}")
+
+    def with_skin(robot: Path) -> Path:
+        robot.write_text(robot.read_text() + sand.ISOTROPIC_SKIN)
+        return robot
+
+    def row(robot: Path, yaw: float = 0.0) -> str:
+        return " ".join(
+            f"{sand.rigid_ground_advance(f, robot, yaw=math.radians(yaw)).mean():+.4f}"
+            for f in (0.25, 0.5, 1.0, 1.5)
+        )
+
+    print("advance at 0.25, 0.5, 1, 1.5 Hz, started at a heading of 0 | of 45 degrees:")
+    rows = [
+        ("rigid contacts, Bullet's cone", ROBOTS / "sandfish-robot.yaml"),
+        ("rigid contacts, isotropic skin", with_skin(robot_variant())),
+        ("soft contacts (the cases'), Bullet's cone", soft),
+    ]
+    for k, d in ((1e3, 20), (3e3, 20), (1e4, 20), (3e4, 20), (1e5, 20), (1e4, 5), (1e4, 50)):
+        contact = f'<contact><stiffness value="{k:g}"/><damping value="{d:g}"/></contact>'
+        rows.append(
+            (f"soft contacts {k:g} N/m, {d:g} N s/m, isotropic skin", with_skin(robot_variant(contact)))
+        )
+    for name, robot in rows:
+        print(f"  {name}: {row(robot)} | {row(robot, 45)}")
+
+
 def main() -> None:
     FIGURES.mkdir(parents=True, exist_ok=True)
     alpha_maps()
@@ -268,6 +443,7 @@ def main() -> None:
     study()
     on_the_surface()
     rigid_ground()
+    rigid_ground_causes()
 
 
 if __name__ == "__main__":
