@@ -357,6 +357,8 @@ def bullet_contacts(frequency: float, urdf: Path, cone: bool = True, yaw: float 
     com = centres.mean(axis=1)
     first = hold + per - 1
     load = np.array([np.bincount(r[:, 0].astype(int), r[:, 1], minlength=7) for r in contacts])
+    count = np.array([np.bincount(r[r[:, 1] > 0, 0].astype(int), minlength=7) for r in contacts])
+    follows = np.mean([np.corrcoef(load[:, g], count[:, g])[0, 1] for g in range(7) if count[:, g].std() > 0])
     net = np.array([np.hypot(*r[:, 6:8].sum(0)) for r in contacts])
     sliding = np.concatenate([r[(np.hypot(r[:, 4], r[:, 5]) > 1e-3) & (r[:, 1] > 0)] for r in contacts])
     off = np.degrees(
@@ -390,7 +392,9 @@ def bullet_contacts(frequency: float, urdf: Path, cone: bool = True, yaw: float 
         f"(mu W {0.15 * weight:.2f}); tracking {tracking:.4f} rad rms, quasi-static Coulomb with these "
         f"joint angles {measured:+.4f}; the friction off the slip (loaded, sliding contacts) by "
         f"{np.median(off):.1f} degrees (median), {np.percentile(off, 90):.1f} (90th percentile); the loaded "
-        f"points' mean depth {-1000 * np.concatenate([r[r[:, 1] > 0, 8] for r in contacts]).mean():.4f} mm"
+        f"points' mean depth {-1000 * np.concatenate([r[r[:, 1] > 0, 8] for r in contacts]).mean():.4f} mm, "
+        f"{count.min()} to {count.max()} of them a segment, a segment's load against their count "
+        f"correlated {follows:.2f} (the segments' mean)"
     )
 
 
@@ -406,7 +410,8 @@ def rigid_ground_causes() -> None:
         print(f"  {f} Hz: {bullet_contacts(f, urdf)}")
     print(f"  0.5 Hz, heading 45: {bullet_contacts(0.5, urdf, yaw=math.radians(45))}")
     print(f"  0.5 Hz, pyramid friction: {bullet_contacts(0.5, urdf, cone=False)}")
-    print(f"  0.5 Hz, the suit's soft contact: {bullet_contacts(0.5, soft.parent / 'sandfish-robot.urdf')}")
+    for f in (0.25, 0.5):
+        print(f"  {f} Hz, the suit's soft contact: {bullet_contacts(f, soft.parent / 'sandfish-robot.urdf')}")
     stiff = robot_variant('<contact><stiffness value="1e5"/><damping value="20"/></contact>')
     print(f"  0.5 Hz, soft contact 1e5 N/m: {bullet_contacts(0.5, stiff.parent / 'sandfish-robot.urdf')}")
 
