@@ -149,10 +149,18 @@ def spheres(n: int) -> Callable[[float], str]:
     )
 
 
+#: The suit as the robot file carries it (robots/sandfish-robot.urdf's <contact> on every link, the
+#: .yaml's isotropic skin friction), read from the files: the study adds them to the plain robot.
+SUIT_CONTACT = re.search(r"<contact>.*?</contact>", (ROBOTS / "sandfish-robot.urdf").read_text()).group(0)
+ISOTROPIC_SKIN = re.search(r"(?m)^skin_friction:.*\n", (ROBOTS / "sandfish-robot.yaml").read_text()).group(0)
+
+
 def robot_variant(contact: str = "", collision: Callable[[float], str] | None = None) -> Path:
-    """The robot sandfish with a <contact> element on every link (pybullet's soft contact, say) and/or
-    each segment's collision shapes replaced by ``collision`` of its centre."""
-    text = (ROBOTS / "sandfish-robot.urdf").read_text()
+    """The PLAIN robot sandfish, the study's "before": the robot file without the suit (its <contact>
+    elements and skin friction stripped, so pybullet's defaults: Bullet's rigid contacts and its friction
+    cone), with a <contact> element on every link (pybullet's soft contact, say) and/or each segment's
+    collision shapes replaced by ``collision`` of its centre. ``robot_variant()`` is the plain robot."""
+    text = re.sub(r"\s*<contact>.*?</contact>", "", (ROBOTS / "sandfish-robot.urdf").read_text())
     if contact:
         text = re.sub(r'(<link name="seg\d">)', r"\1" + contact, text)
     if collision:
@@ -162,7 +170,7 @@ def robot_variant(contact: str = "", collision: Callable[[float], str] | None = 
     folder = Path(tempfile.mkdtemp())
     (folder / "sandfish-robot.urdf").write_text(text)
     robot = folder / "sandfish-robot.yaml"
-    robot.write_text((ROBOTS / "sandfish-robot.yaml").read_text())
+    robot.write_text((ROBOTS / "sandfish-robot.yaml").read_text().replace(ISOTROPIC_SKIN, ""))
     return robot
 
 
@@ -233,17 +241,23 @@ def quasi_static_coulomb(
 def rigid_ground() -> None:
     """Why the robot sandfish advanced on rigid flat ground (sand.sandfish-rigid-ground), and the
     segment shapes tried: each one's advance at 0.5, 1 and 1.5 Hz and its wave efficiency in the sand
-    at the same frequencies."""
-    print("robot sandfish on rigid ground: centre of mass's advance along the body's axis, lengths/cycle")
+    at the same frequencies. All on the plain robot (:func:`robot_variant`, without the suit), as the
+    study was made before the robot file carried the suit."""
+    plain = robot_variant()
+    print("the plain robot sandfish (no suit) on rigid ground: the centre of mass's advance along the body's")
+    print("axis, body lengths/cycle")
     for f in (0.25, 0.5, 1.0, 1.5):
-        print(f"  {f} Hz: {sand.rigid_ground_advance(f).mean():+.4f}")
+        print(f"  {f} Hz: {sand.rigid_ground_advance(f, plain).mean():+.4f}")
     print("  started at a heading of 0, 15, 30, 45, 60, 90 degrees:")
     for f in (0.5, 1.0, 1.5):
-        row = (sand.rigid_ground_advance(f, yaw=math.radians(yaw)).mean() for yaw in (0, 15, 30, 45, 60, 90))
+        row = (
+            sand.rigid_ground_advance(f, plain, yaw=math.radians(y)).mean() for y in (0, 15, 30, 45, 60, 90)
+        )
         print(f"    {f} Hz: " + " ".join(f"{a:+.4f}" for a in row))
     for mu in (0.1, 1.0):
         w = f"ground_friction: {mu}\n"
-        print(f"  1 Hz, ground_friction {mu}: {sand.rigid_ground_advance(1.0, world_text=w).mean():+.4f}")
+        advance = sand.rigid_ground_advance(1.0, plain, world_text=w).mean()
+        print(f"  1 Hz, ground_friction {mu}: {advance:+.4f}")
     soft = "<contact><stiffness value='10000'/><damping value='20'/></contact>"
     soft_name = "soft contacts (stiffness 1e4 N/m, damping 20)"
     anchor = "<contact><friction_anchor/></contact>"
@@ -402,9 +416,10 @@ def rigid_ground_causes() -> None:
     """What makes the robot sandfish advance on rigid ground at 0.5 Hz (docs/media.md, "No advance on
     rigid ground", the checks in order): Bullet's friction (cone, pyramid, snakesim's isotropic Coulomb
     skin), the joints' tracking and inertia, the weight's split along the body; then the suit's soft
-    contact with isotropic friction (sand.suit_on_floor, the cases' robot) against its stiffness."""
-    urdf = ROBOTS / "sandfish-robot.urdf"
-    soft = robot_variant(sand.SUIT_CONTACT)
+    contact with isotropic friction (the robot file as shipped) against its stiffness. "Rigid contacts"
+    is the plain robot (:func:`robot_variant`); pybullet reads the URDF's <contact> but not the skin."""
+    urdf = robot_variant().parent / "sandfish-robot.urdf"
+    soft = robot_variant(SUIT_CONTACT)
     print("Bullet's contacts (pybullet 3.2.7, heading 0, rigid contacts unless said):")
     for f in (0.25, 0.5, 1.0, 1.5):
         print(f"  {f} Hz: {bullet_contacts(f, urdf)}")
@@ -416,7 +431,7 @@ def rigid_ground_causes() -> None:
     print(f"  0.5 Hz, soft contact 1e5 N/m: {bullet_contacts(0.5, stiff.parent / 'sandfish-robot.urdf')}")
 
     def with_skin(robot: Path) -> Path:
-        robot.write_text(robot.read_text() + sand.ISOTROPIC_SKIN)
+        robot.write_text(robot.read_text() + ISOTROPIC_SKIN)
         return robot
 
     def row(robot: Path, yaw: float = 0.0) -> str:
@@ -427,15 +442,17 @@ def rigid_ground_causes() -> None:
 
     print("advance at 0.25, 0.5, 1, 1.5 Hz, started at a heading of 0 | of 45 degrees:")
     rows = [
-        ("rigid contacts, Bullet's cone", ROBOTS / "sandfish-robot.yaml"),
+        ("rigid contacts, Bullet's cone (the plain robot)", robot_variant()),
         ("rigid contacts, isotropic skin", with_skin(robot_variant())),
-        ("soft contacts (the cases'), Bullet's cone", soft),
+        ("soft contacts (the robot file's), Bullet's cone", soft),
     ]
     for k, d in ((1e3, 20), (3e3, 20), (1e4, 20), (3e4, 20), (1e5, 20), (1e4, 5), (1e4, 50)):
         contact = f'<contact><stiffness value="{k:g}"/><damping value="{d:g}"/></contact>'
         rows.append(
             (f"soft contacts {k:g} N/m, {d:g} N s/m, isotropic skin", with_skin(robot_variant(contact)))
         )
+    shipped = "the robot file as shipped (its suit: 1e4 N/m, 20 N s/m, isotropic skin)"
+    rows.append((shipped, ROBOTS / "sandfish-robot.yaml"))
     for name, robot in rows:
         print(f"  {name}: {row(robot)} | {row(robot, 45)}")
 

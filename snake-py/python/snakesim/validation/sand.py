@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import math
-import re
 import tempfile
 from pathlib import Path
 
@@ -40,19 +39,6 @@ media:
 """
 BURIED = (0.0, 0.0, 0.02, 0.0)
 RIGID = "ground_friction: 0.3\n"
-
-#: The robot sandfish's suit on a floor, for the rigid-ground cases (docs/media.md, "No advance on rigid
-#: ground"). Each contact point soft (pybullet's URDF ``<contact>``, estimated: 1e4 N/m, 20 N s/m): the
-#: segments are one rigid body in pitch and roll, so rigid contacts along them leave the weight's split
-#: to Bullet's solver, which swings it between segments (0 to 5 N against 1.3 N) twice a cycle; a soft
-#: contact shares it by the penetration, as the suit's give does. And Coulomb's isotropic friction (skin
-#: friction, equal coefficients), which Maladen et al.'s statement assumes: Bullet's default cone clamps
-#: the two world-axis friction rows together after each row's own update, and at convergence that
-#: force opposes the slip weighted by each row's effective mass, not the slip. 0.5 is the links'
-#: default lateral friction, so the coefficient at the contact is the plain robot's (0.5 times the
-#: ground's).
-SUIT_CONTACT = '<contact><stiffness value="10000"/><damping value="20"/></contact>'
-ISOTROPIC_SKIN = "skin_friction: {forward: 0.5, backward: 0.5, transverse: 0.5, axis: x}\n"
 
 
 def _alpha_z_plate_down() -> Result:
@@ -194,16 +180,6 @@ def advance_per_cycle(centres: np.ndarray, first: int, per: int) -> np.ndarray:
     return np.array(out)
 
 
-def suit_on_floor(folder: Path) -> Path:
-    """The robot sandfish with :data:`SUIT_CONTACT` on every link and :data:`ISOTROPIC_SKIN`, written into
-    ``folder`` (its URDF and robot file under their own names); returns the robot file."""
-    urdf = (ROBOTS / "sandfish-robot.urdf").read_text()
-    (folder / "sandfish-robot.urdf").write_text(re.sub(r'(<link name="[^"]+">)', r"\1" + SUIT_CONTACT, urdf))
-    robot = folder / "sandfish-robot.yaml"
-    robot.write_text((ROBOTS / "sandfish-robot.yaml").read_text() + ISOTROPIC_SKIN)
-    return robot
-
-
 def rigid_ground_advance(
     frequency: float = 1.0,
     robot: Path | None = None,
@@ -213,7 +189,9 @@ def rigid_ground_advance(
 ) -> np.ndarray:
     """The robot sandfish on rigid flat ground: held for a second in the wave's first shape (it settles
     there: the snap into shape turns it), one cycle of the wave to settle into its motion, then
-    ``cycles`` whole cycles, each one's advance (:func:`advance_per_cycle`)."""
+    ``cycles`` whole cycles, each one's advance (:func:`advance_per_cycle`). The robot file carries the
+    suit's soft contact and isotropic friction (robots/sandfish-robot.urdf and .yaml; docs/media.md, "No
+    advance on rigid ground"): the cases run it as shipped."""
     robot = robot or ROBOTS / "sandfish-robot.yaml"
     wave = sandfish_targets(robot, 0.2 * BODY, BODY, frequency, SEGMENT, (cycles + 1) / frequency)
     hold = int(RATE)
@@ -227,13 +205,12 @@ def rigid_ground_advance(
 
 
 def _rigid_no_advance(frequency: float) -> Result:
-    with tempfile.TemporaryDirectory() as folder:
-        advance = float(rigid_ground_advance(frequency, suit_on_floor(Path(folder))).mean())
+    advance = float(rigid_ground_advance(frequency).mean())
     return Result(
         name=f"sand.sandfish-rigid-ground-{frequency:g}hz",
         quantity=(
             "advance of the centre of mass along the body's axis, rigid flat ground, friction 0.3, "
-            f"{frequency:g} Hz, the suit's soft contact and isotropic Coulomb friction"
+            f"{frequency:g} Hz (the robot file's suit: soft contact, isotropic Coulomb friction)"
         ),
         published=0.0,
         unit="body lengths/cycle",
