@@ -12,7 +12,7 @@ use crate::controllers::{
     ControlledEnv, HandController, HeldWave, Imitable, JointsSine, GAIT_ACTION_LEN,
 };
 use crate::env::EnvConfig;
-use crate::error::{invalid, Result};
+use crate::error::{invalid, invalid_at, Error, Result};
 
 /// A controller a run can imitate, by its name (`init.imitate`): a joint-target wave or a
 /// gait-action hand controller. Written in configurations as the name (`"steered_sine"`,
@@ -110,7 +110,8 @@ pub enum Demonstrator {
 
 impl Demonstrator {
     /// `imitated` for `envs` envs of `config`, holding `hold` (a hand controller only; `None`: the
-    /// middle of the ranges, as the baselines do), or an error saying why it cannot drive them.
+    /// middle of the ranges, as the baselines do), or an error saying why it cannot drive them: one
+    /// about `hold` has the key `hold` (`hold.amplitude`), one about the env none.
     pub fn new(
         imitated: Imitated,
         hold: Option<HeldWave>,
@@ -120,18 +121,24 @@ impl Demonstrator {
         match imitated {
             Imitated::Joints(kind) => {
                 if hold.is_some() {
-                    return Err(invalid(format!(
-                        "{} sets joint targets: only the gait-action controllers ({}) hold an \
-                         amplitude and a frequency",
-                        kind.name(),
-                        HandController::ALL.map(HandController::name).join(", ")
-                    )));
+                    return Err(invalid_at(
+                        "hold",
+                        format!(
+                            "{} sets joint targets: only the gait-action controllers ({}) hold an \
+                             amplitude and a frequency",
+                            kind.name(),
+                            HandController::ALL.map(HandController::name).join(", ")
+                        ),
+                    ));
                 }
                 JointsSine::new(kind, config, envs).map(Demonstrator::Joints)
             }
             Imitated::Hand(controller) => {
                 let hold = hold.unwrap_or_default();
-                hold.validate()?;
+                hold.validate().map_err(|e| match e {
+                    Error::InvalidArgument(i) => Error::InvalidArgument(i.under("hold")),
+                    e => e,
+                })?;
                 let on = ControlledEnv::of(config, "the gait-action controllers")?;
                 Ok(Demonstrator::Hand {
                     controller,

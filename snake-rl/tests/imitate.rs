@@ -367,6 +367,10 @@ fn bad_init_tables_name_the_key() {
             "init.hold.frequency: must be a finite number, got .nan",
         ),
         (
+            "init: {imitate: steer, hold: {amplitude: 0.5}}",
+            "init.imitate: the gait-action controllers need action mode 'gait'",
+        ),
+        (
             "init: {imitate: steer, hold: {speed: 1}}\nenv: {task: goal}",
             "init.hold.speed: unknown field `speed`",
         ),

@@ -135,18 +135,15 @@ impl InitConfig {
             check_real("init.anchor", anchor.initial(), false)?;
             check_range("init.anchor", anchor.initial(), 0.0, MAX_ANCHOR_WEIGHT)?;
         }
-        let key = if self.hold.is_some() {
-            "init.hold"
-        } else {
-            "init.imitate"
-        };
+        // The controller's errors about `hold` carry its key; the others are about the env it
+        // cannot drive, which `init.imitate` chose.
         self.demonstrator(env, n_envs)
             .map(drop)
-            .map_err(|e| match e {
+            .map_err(|e| match &e {
                 snake_core::Error::InvalidArgument(i) if i.key().is_some() => {
-                    key_err(format!("{key}.{}", i.key().unwrap_or_default()), i.detail())
+                    key_err(format!("init.{}", i.key().unwrap_or_default()), i.detail())
                 }
-                e => key_err(key, e.message()),
+                _ => key_err("init.imitate", e.message()),
             })
     }
 
