@@ -393,10 +393,10 @@ pub struct Hydro {
 }
 
 impl Hydro {
-    /// The link's hydrodynamic description: the axis is the longest side of its largest primitive
-    /// (by volume), the length is the extent of all primitives along it, the cross-section that of
-    /// the largest primitive. `what` names the link in messages: a link with no volume cannot be in
-    /// water.
+    /// The link's hydrodynamic description: the axis is the side of its largest primitive (by volume)
+    /// along which all its primitives reach furthest (a single primitive's longest side), the length
+    /// is the extent of all primitives along it, the cross-section that of the largest primitive
+    /// across it. `what` names the link in messages: a link with no volume cannot be in water.
     pub fn new<I: Iterator<Item = PlacedSolid> + Clone>(
         solids: I,
         mass: f64,
@@ -417,10 +417,25 @@ impl Hydro {
             )));
         };
         let half = largest.solid.half_extents();
-        // The primitive's longest side is the link's axis; its other two sides are the cross axes.
+        // The primitive's sides, longest first.
         let mut order = [0usize, 1, 2];
         order.sort_by(|&i, &j| half[j].total_cmp(&half[i]));
         let rot = largest.pose.rotation;
+        // The link's axis is the side along which all its primitives reach furthest; its other two
+        // sides are the cross axes. For one primitive that is its longest side (the margin keeps
+        // rounding from choosing another where sides are equal); a body cut into coaxial slices
+        // (robots/sandfish-robot.urdf) has slices wider than long, and is long along the body.
+        let span = |k: usize| {
+            let (lo, hi) = reach(solids.clone(), &(rot * Vector3::ith(k, 1.0)));
+            hi - lo
+        };
+        let mut along = 0;
+        for i in 1..3 {
+            if span(order[i]) > span(order[along]) * (1.0 + 1e-9) {
+                along = i;
+            }
+        }
+        order[..=along].rotate_right(1);
         let axis = rot * Vector3::ith(order[0], 1.0);
         let e2 = rot * Vector3::ith(order[1], 1.0);
         let e3 = axis.cross(&e2);
@@ -428,18 +443,7 @@ impl Hydro {
             UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_basis_unchecked(&[
                 axis, e2, e3,
             ]));
-        // Extent of every primitive along the axis.
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for s in solids {
-            let h = s.solid.half_extents();
-            let c0 = s.pose.translation.vector.dot(&axis);
-            let r = s.pose.rotation.to_rotation_matrix();
-            let reach: f64 = (0..3)
-                .map(|k| h[k] * (r.matrix().column(k).dot(&axis)).abs())
-                .sum();
-            lo = lo.min(c0 - reach);
-            hi = hi.max(c0 + reach);
-        }
+        let (lo, hi) = reach(solids, &axis);
         let length = hi - lo;
         let (w2, w3) = (half[order[1]], half[order[2]]);
         let l = length / 2.0;
@@ -473,6 +477,23 @@ impl Hydro {
             linear: c.linear,
         })
     }
+}
+
+/// The interval the primitives cover along `axis` (a unit vector of the link's centre-of-mass
+/// frame): each one's bounding box projected on it.
+fn reach<I: Iterator<Item = PlacedSolid>>(solids: I, axis: &Vector3<f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for s in solids {
+        let h = s.solid.half_extents();
+        let c0 = s.pose.translation.vector.dot(axis);
+        let r = s.pose.rotation.to_rotation_matrix();
+        let reach: f64 = (0..3)
+            .map(|k| h[k] * (r.matrix().column(k).dot(axis)).abs())
+            .sum();
+        lo = lo.min(c0 - reach);
+        hi = hi.max(c0 + reach);
+    }
+    (lo, hi)
 }
 
 /// A link's state, world frame: its COM pose and velocities.
@@ -928,6 +949,46 @@ mod tests {
         let (v, c) = submerged(&Solid::Sphere { radius: 0.1 }, &Isometry3::identity(), 0.0);
         assert!((v - 2.0 / 3.0 * PI * 1e-3).abs() < 1e-15);
         assert!((c.z + 3.0 * 0.1 / 8.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_cylinder_cut_into_coaxial_slices_is_long_along_the_body() {
+        use nalgebra::Translation3;
+        // robots/sandfish-robot.urdf's segment: a cylinder 0.065 m long, 0.0175 m in radius, along
+        // the link's x as seven slices end to end, each wider (0.035 m) than long (0.0093 m). The
+        // link is the cylinder: axis x, length 0.065, semi-axes 0.0175, and Kelasidi's coefficients
+        // written out for it.
+        let (r, l, n) = (0.0175, 0.065, 7);
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI / 2.0);
+        let slices: Vec<PlacedSolid> = (0..n)
+            .map(|k| PlacedSolid {
+                solid: Solid::Cylinder {
+                    radius: r,
+                    length: l / n as f64,
+                },
+                pose: Isometry3::from_parts(
+                    Translation3::new(-l / 2.0 + (k as f64 + 0.5) * l / n as f64, 0.0, 0.0),
+                    turn,
+                ),
+            })
+            .collect();
+        let c = Coefficients::default();
+        let h = Hydro::new(slices.iter().copied(), 0.13, 1000.0, c, "seg0").unwrap();
+        assert!(
+            (h.frame * Vector3::x()).x.abs() > 1.0 - 1e-12,
+            "{:?}",
+            h.frame
+        );
+        assert!((h.length - l).abs() < 1e-12, "{}", h.length);
+        assert!(h.half_width.iter().all(|w| (w - r).abs() < 1e-12));
+        let rho = 1000.0;
+        let c_t = 0.5 * rho * PI * c.skin_friction * 2.0 * r * l;
+        let c_n = 0.5 * rho * c.drag * 2.0 * r * l;
+        assert!(
+            (h.c_t - c_t).abs() < 1e-12 * c_t
+                && h.c_n.iter().all(|v| (v - c_n).abs() < 1e-12 * c_n)
+        );
+        assert!((h.volume - PI * r * r * l).abs() < 1e-15);
     }
 
     #[test]
