@@ -30,9 +30,10 @@ YAML layout (every key optional; unknown keys are errors)::
     threads: null          # native: threads of the envs and updates (null: one per core)
     energy_ramp: null      # native: [from, to] timesteps over which env.reward.energy_weight rises from 0
     steer_assist: null     # native: {residual: true} and/or {near_goal: M}: baseline:steer shares the actions
-    init: null             # native: fit the policy to a controller before PPO: {imitate: sine or
-                           # steered_sine, steps: 65536, epochs: 10, batch_size: 256, learning_rate: 1e-3,
-                           # log_std: -1.6, critic: false, anchor: null}; docs/guide.md
+    init: null             # native: fit the policy to a controller before PPO: {imitate: sine,
+                           # steered_sine, gait or steer, hold: null ({amplitude: A, frequency: F}: gait
+                           # and steer's held actions), steps: 65536, epochs: 10, batch_size: 256,
+                           # learning_rate: 1e-3, log_std: -1.6, critic: false, anchor: null}; docs/guide.md
     ppo: {learning_rate: 3.0e-4, n_steps: 4096, batch_size: 64, n_epochs: 10, gamma: 0.99,
           gae_lambda: 0.95, clip_range: 0.2, clip_range_vf: null, normalize_advantage: true,
           ent_coef: 0.0, vf_coef: 0.5, max_grad_norm: 0.5, target_kl: null}
