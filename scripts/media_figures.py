@@ -239,7 +239,7 @@ def quasi_static_coulomb(
 
 
 def rigid_ground() -> None:
-    """Why the robot sandfish advanced on rigid flat ground (sand.sandfish-rigid-ground), and the
+    """Why the robot sandfish advanced on rigid flat ground (sand.sandfish-rigid-ground-*), and the
     segment shapes tried: each one's advance at 0.5, 1 and 1.5 Hz and its wave efficiency in the sand
     at the same frequencies. All on the plain robot (:func:`robot_variant`, without the suit), as the
     study was made before the robot file carried the suit."""

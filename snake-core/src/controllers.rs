@@ -113,7 +113,7 @@ impl HeldWave {
 }
 
 /// The one of `all` whose `name_of` is `name`; the error (a `what`) lists the names.
-fn by_name<T: Copy>(
+pub(crate) fn by_name<T: Copy>(
     all: &[T],
     name_of: fn(T) -> &'static str,
     name: &str,

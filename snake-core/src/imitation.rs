@@ -9,10 +9,10 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use crate::controllers::{
-    ControlledEnv, HandController, HeldWave, Imitable, JointsSine, GAIT_ACTION_LEN,
+    by_name, ControlledEnv, HandController, HeldWave, Imitable, JointsSine, GAIT_ACTION_LEN,
 };
 use crate::env::EnvConfig;
-use crate::error::{invalid, invalid_at, Error, Result};
+use crate::error::{invalid_at, Error, Result};
 
 /// A controller a run can imitate, by its name (`init.imitate`): a joint-target wave or a
 /// gait-action hand controller. Written in configurations as the name (`"steered_sine"`,
@@ -45,13 +45,12 @@ impl Imitated {
 
     /// The one called `name`; the error lists every name.
     pub fn from_name(name: &str) -> Result<Self> {
-        Self::all().find(|c| c.name() == name).ok_or_else(|| {
-            let names: Vec<_> = Self::all().map(Imitated::name).collect();
-            invalid(format!(
-                "unknown controller '{name}' (expected one of: {})",
-                names.join(", ")
-            ))
-        })
+        by_name(
+            &Self::all().collect::<Vec<_>>(),
+            Self::name,
+            name,
+            "controller",
+        )
     }
 }
 
@@ -101,9 +100,7 @@ pub enum Demonstrator {
         on: ControlledEnv,
         /// The amplitude and frequency actions it holds.
         hold: HeldWave,
-        /// The number of envs.
-        envs: usize,
-        /// Its float64 actions before they are written as the policy's float32 ones.
+        /// Its float64 actions for every env before they are written as the policy's float32 ones.
         scratch: Vec<f64>,
     },
 }
@@ -144,7 +141,6 @@ impl Demonstrator {
                     controller,
                     on,
                     hold,
-                    envs,
                     scratch: vec![0.0; envs * GAIT_ACTION_LEN],
                 })
             }
@@ -155,7 +151,7 @@ impl Demonstrator {
     pub fn envs(&self) -> usize {
         match self {
             Demonstrator::Joints(c) => c.envs(),
-            Demonstrator::Hand { envs, .. } => *envs,
+            Demonstrator::Hand { scratch, .. } => scratch.len() / GAIT_ACTION_LEN,
         }
     }
 
@@ -183,10 +179,10 @@ impl Demonstrator {
                 controller,
                 on,
                 hold,
-                envs,
                 scratch,
             } => {
-                controller.act_holding(on, obs, *envs, scratch, *hold);
+                let envs = scratch.len() / GAIT_ACTION_LEN;
+                controller.act_holding(on, obs, envs, scratch, *hold);
                 for (a, s) in actions.iter_mut().zip(scratch.iter()) {
                     *a = *s as f32;
                 }

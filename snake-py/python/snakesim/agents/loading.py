@@ -95,7 +95,10 @@ def load_agent(
             )
         return load_baseline(name, None, None, env_overrides, source=_env_source(env_from), hold=hold)
     if hold is not None:
-        raise AgentError(Keyword("hold"), " is for the gait-action baselines (baseline:gait, baseline:steer)")
+        from snakesim.agents.baselines import GAIT_NAMES
+
+        gait = ", ".join(BASELINE_PREFIX + n for n in GAIT_NAMES)
+        raise AgentError(Keyword("hold"), f" is for the gait-action baselines ({gait})")
     if task != "goal" or env_from is not None:
         raise AgentError(
             Keyword("task"),
