@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::env::{ActionMode, EnvConfig, ObservationPart};
 use crate::error::{invalid, invalid_at, Result};
 use crate::gait::{Gait, LateralUndulation};
+use crate::keys::by_name;
 
 /// With [`SteerAssist::residual`], the agent's steering action's weight in the sum
 /// `clip(steer + STEER_RESIDUAL_GAIN * a, -1, 1)`: 2, so that whatever `baseline:steer` asks (at
@@ -110,26 +111,6 @@ impl HeldWave {
         }
         Ok(())
     }
-}
-
-/// The one of `all` whose `name_of` is `name`; the error (a `what`) lists the names.
-pub(crate) fn by_name<T: Copy>(
-    all: &[T],
-    name_of: fn(T) -> &'static str,
-    name: &str,
-    what: &str,
-) -> Result<T> {
-    all.iter()
-        .copied()
-        .find(|c| name_of(*c) == name)
-        .ok_or_else(|| {
-            let names: Vec<_> = all.iter().map(|c| name_of(*c)).collect();
-            // `invalid` caps the message, so a hostile name cannot flood it.
-            invalid(format!(
-                "unknown {what} '{name}' (expected one of: {})",
-                names.join(", ")
-            ))
-        })
 }
 
 /// `baseline:steer`'s steering action for the goal vector (gx, gy) in the head frame (its -y ahead,

@@ -9,10 +9,11 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use crate::controllers::{
-    by_name, ControlledEnv, HandController, HeldWave, Imitable, JointsSine, GAIT_ACTION_LEN,
+    ControlledEnv, HandController, HeldWave, Imitable, JointsSine, GAIT_ACTION_LEN,
 };
 use crate::env::EnvConfig;
 use crate::error::{invalid_at, Error, Result};
+use crate::keys::by_name;
 
 /// A controller a run can imitate, by its name (`init.imitate`): a joint-target wave or a
 /// gait-action hand controller. Written in configurations as the name (`"steered_sine"`,

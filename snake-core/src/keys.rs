@@ -139,3 +139,23 @@ pub mod integer {
         }
     }
 }
+
+/// The one of `all` whose `name_of` is `name`; the error (a `what`) lists the names.
+pub(crate) fn by_name<T: Copy>(
+    all: &[T],
+    name_of: fn(T) -> &'static str,
+    name: &str,
+    what: &str,
+) -> Result<T> {
+    all.iter()
+        .copied()
+        .find(|c| name_of(*c) == name)
+        .ok_or_else(|| {
+            let names: Vec<_> = all.iter().map(|c| name_of(*c)).collect();
+            // `invalid` caps the message, so a hostile name cannot flood it.
+            invalid(format!(
+                "unknown {what} '{name}' (expected one of: {})",
+                names.join(", ")
+            ))
+        })
+}

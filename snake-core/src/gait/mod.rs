@@ -127,13 +127,12 @@ impl std::str::FromStr for GaitKind {
     type Err = crate::Error;
 
     fn from_str(s: &str) -> Result<Self> {
-        GaitKind::named().find(|k| k.name() == s).ok_or_else(|| {
-            let names: Vec<&str> = GaitKind::named().map(|k| k.name()).collect();
-            invalid(format!(
-                "unknown gait '{s}' (expected one of: {})",
-                names.join(", ")
-            ))
-        })
+        crate::keys::by_name(
+            &GaitKind::named().collect::<Vec<_>>(),
+            GaitKind::name,
+            s,
+            "gait",
+        )
     }
 }
 
